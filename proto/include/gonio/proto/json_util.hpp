@@ -1,0 +1,91 @@
+// Strict reading of JSON objects: typed fields, named errors, unknown keys rejected.
+//
+//   json_util::ObjectReader r(j, "sample");
+//   auto name = r.required<std::string>("name");
+//   auto tol  = r.optional<double>("tolerance", 0.02);
+//   r.finish();   // throws if j has keys nobody asked for
+//
+// Errors are gonio::Error(invalid_argument) whose field is "<context>.<key>".
+#pragma once
+
+#include <set>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include <nlohmann/json.hpp>
+
+#include "gonio/proto/error.hpp"
+
+namespace gonio::json_util {
+
+// Re-issues `e` with `prefix` put in front of its field ("points[3]" + "theta_r").
+Error prefixed(const Error& e, std::string_view prefix);
+
+std::string type_name(const nlohmann::json& j);
+
+template <typename T>
+T get_as(const nlohmann::json& j, const std::string& field) {
+  if constexpr (std::is_same_v<T, double>) {
+    if (!j.is_number()) throw Error::invalid(field, "expected a number, got " + type_name(j));
+    return j.template get<double>();
+  } else if constexpr (std::is_same_v<T, bool>) {
+    if (!j.is_boolean()) throw Error::invalid(field, "expected a boolean, got " + type_name(j));
+    return j.template get<bool>();
+  } else if constexpr (std::is_integral_v<T>) {
+    if (!j.is_number_integer())
+      throw Error::invalid(field, "expected an integer, got " + type_name(j));
+    return j.template get<T>();
+  } else if constexpr (std::is_same_v<T, std::string>) {
+    if (!j.is_string()) throw Error::invalid(field, "expected a string, got " + type_name(j));
+    return j.template get<std::string>();
+  } else {
+    try {
+      return j.template get<T>();
+    } catch (const Error& e) {
+      throw prefixed(e, field);
+    } catch (const nlohmann::json::exception& e) {
+      throw Error::invalid(field, e.what());
+    }
+  }
+}
+
+class ObjectReader {
+ public:
+  ObjectReader(const nlohmann::json& j, std::string context);
+
+  bool has(const std::string& key) const { return j_.contains(key); }
+
+  template <typename T>
+  T required(const std::string& key) {
+    used_.insert(key);
+    const auto it = j_.find(key);
+    if (it == j_.end()) throw Error::invalid(path(key), "is required");
+    return get_as<T>(*it, path(key));
+  }
+
+  template <typename T>
+  T optional(const std::string& key, T fallback) {
+    used_.insert(key);
+    const auto it = j_.find(key);
+    if (it == j_.end() || it->is_null()) return fallback;
+    return get_as<T>(*it, path(key));
+  }
+
+  // Marks a key as consumed without reading it (the caller handles it itself).
+  const nlohmann::json* raw(const std::string& key);
+
+  // Throws naming the first key that no read asked for.
+  void finish() const;
+
+  std::string path(const std::string& key) const {
+    return join_field(context_, key);
+  }
+
+ private:
+  const nlohmann::json& j_;
+  std::string context_;
+  std::set<std::string> used_;
+};
+
+}  // namespace gonio::json_util
