@@ -1,0 +1,79 @@
+// Twin — the virtual measurement: predicts the radiance factor the instrument reports.
+//
+// For a geometry, the twin estimates the detector flux for the sample and for the
+// reference white (per-geometry or fixed calibration, see InstrumentProfile) and reports
+// β = Φ_sample / Φ_reference × β_reference per wavelength channel, with its standard
+// error from R independent randomisations.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "gonio/proto/geometry.hpp"
+#include "gonio/proto/spectrum.hpp"
+#include "gonio/twin/bsdf.hpp"
+#include "gonio/twin/instrument.hpp"
+
+namespace gonio::twin {
+
+enum class EstimatorKind {
+  rqmc,      // Owen-scrambled Sobol, analytic footprint overlap, MIS of aperture and BSDF
+  baseline,  // the founding paper's scheme: uniform pupil sampling, (n·v)^4, plain MC
+};
+
+struct EstimatorOptions {
+  EstimatorKind kind = EstimatorKind::rqmc;
+  double rel_se = 1e-3;                   // stop when max over channels of s.e./β ≤ this
+  std::uint64_t max_samples = 1ull << 22; // budget per geometry, sample + reference paths
+  int replicates = 16;                    // R independent randomisations
+  std::uint64_t seed = 1;
+  void validate() const;
+};
+
+struct Diagnostics {
+  double seen_fraction = 1;   // flux-weighted fraction of the lit footprint that is seen
+  double mean_theta_i = 0;    // flux-weighted mean incidence angle, degrees
+  double mean_theta_r = 0;    // flux-weighted mean receiving angle, degrees (signed)
+  bool converged = false;     // rel_se reached within the budget
+};
+
+struct Prediction {
+  Geometry geometry;                 // nominal
+  WavelengthGrid wavelengths;
+  std::vector<double> beta;          // radiance factor per channel
+  std::vector<double> std_error;     // standard error per channel (k = 1)
+  std::uint64_t samples = 0;         // paths traced, sample + reference
+  double seconds = 0;
+  Diagnostics diagnostics;
+
+  Spectrum spectrum() const { return Spectrum(wavelengths, beta, std_error); }
+};
+
+class Twin {
+ public:
+  // Throws Error if the profile is invalid or the BSDF's grid differs from `grid`.
+  Twin(InstrumentProfile profile, BsdfPtr sample, WavelengthGrid grid);
+
+  const InstrumentProfile& profile() const noexcept { return profile_; }
+  const WavelengthGrid& wavelengths() const noexcept { return grid_; }
+  const Bsdf& sample() const noexcept { return *sample_; }
+
+  // Thread-safe; deterministic for options.seed and the geometry.
+  Prediction predict(const Geometry& g, const EstimatorOptions& options = {}) const;
+  // Spreads geometries over `threads` workers (0: hardware concurrency). Results are in
+  // input order and identical to calling predict() one by one.
+  std::vector<Prediction> predict_many(const std::vector<Geometry>& geometries,
+                                       const EstimatorOptions& options = {},
+                                       unsigned threads = 0) const;
+
+  // The true radiance factor π·f(ωi, ωr) at the nominal directions (no instrument).
+  std::vector<double> true_beta(const Geometry& g) const;
+
+ private:
+  InstrumentProfile profile_;
+  BsdfPtr sample_;
+  BsdfPtr reference_;
+  WavelengthGrid grid_;
+};
+
+}  // namespace gonio::twin
