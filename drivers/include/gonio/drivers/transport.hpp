@@ -1,0 +1,66 @@
+// Transport — the byte link between a driver and its device.
+//
+// A transport moves whole outgoing messages and reads incoming bytes. Stream links (serial
+// lines, TCP sockets) have no message boundaries: the protocol layer above finds them (SCPI:
+// a newline). Message links (USBTMC) also report end of message (EOM). Every call takes a
+// deadline on the steady clock and fails with gonio::Error:
+//   timeout       nothing (or not everything) moved before the deadline, or cancel() was called
+//   disconnected  the peer closed the link or the device went away
+//   io_error      any other operating-system failure (message names the call and errno text)
+// Opening fails with not_found (no such device / nobody listening) or busy (in use).
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include <nlohmann/json_fwd.hpp>
+
+namespace gonio::json_util {
+class ObjectReader;
+}
+
+namespace gonio::drivers {
+
+using Clock = std::chrono::steady_clock;
+using Deadline = Clock::time_point;
+
+inline Deadline deadline_after(std::chrono::milliseconds timeout) { return Clock::now() + timeout; }
+// Milliseconds left until `d`, at least 0.
+std::chrono::milliseconds remaining(Deadline d);
+
+struct ReadResult {
+  std::size_t size = 0;         // bytes placed in the buffer (>= 1)
+  bool end_of_message = false;  // the device marked the end of a message (USBTMC EOM)
+};
+
+class Transport {
+ public:
+  virtual ~Transport() = default;
+  Transport() = default;
+  Transport(const Transport&) = delete;
+  Transport& operator=(const Transport&) = delete;
+
+  // Human description for logs and messages: "serial /dev/ttyUSB0 115200 8N1".
+  virtual std::string describe() const = 0;
+  // Sends one whole message (all bytes or an error).
+  virtual void write(std::string_view message, Deadline deadline) = 0;
+  // Waits for at least one byte, returns what is available up to buffer.size().
+  virtual ReadResult read_some(std::span<char> buffer, Deadline deadline) = 0;
+  // Drops input that nobody asked for (late replies after a timeout). Message links also
+  // clear the device's buffers (USBTMC INITIATE_CLEAR).
+  virtual void clear(Deadline deadline) = 0;
+  // Callable from any thread: the call in progress fails soon with Error(timeout).
+  virtual void cancel() noexcept = 0;
+};
+
+using TransportPtr = std::unique_ptr<Transport>;
+
+// Builds a transport of `type` ("serial", "tcp", "usbtmc") from the keys it owns in `r`
+// (see serial.hpp, transport_tcp.hpp, usbtmc.hpp); the caller calls r.finish().
+TransportPtr open_transport(std::string_view type, json_util::ObjectReader& r);
+
+}  // namespace gonio::drivers
