@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "gonio/proto/geometry.hpp"
@@ -23,9 +24,10 @@ enum class EstimatorKind {
 
 struct EstimatorOptions {
   EstimatorKind kind = EstimatorKind::rqmc;
-  double rel_se = 1e-3;                   // stop when max over channels of s.e./β ≤ this
+  double rel_se = 1e-3;                   // stop when every channel has s.e. ≤ rel_se·β
+  double abs_se = 1e-6;                   // ... or s.e. ≤ abs_se (β units), for dark channels
   std::uint64_t max_samples = 1ull << 22; // budget per geometry, sample + reference paths
-  int replicates = 16;                    // R independent randomisations
+  int replicates = 64;                    // R independent randomisations
   std::uint64_t seed = 1;
   void validate() const;
 };
@@ -51,8 +53,10 @@ struct Prediction {
 
 class Twin {
  public:
-  // Throws Error if the profile is invalid or the BSDF's grid differs from `grid`.
+  // Throws Error if the profile is invalid or the BSDF's grid differs from `grid`. The
+  // reference white is built from profile.reference_bsdf unless given explicitly.
   Twin(InstrumentProfile profile, BsdfPtr sample, WavelengthGrid grid);
+  Twin(InstrumentProfile profile, BsdfPtr sample, BsdfPtr reference, WavelengthGrid grid);
 
   const InstrumentProfile& profile() const noexcept { return profile_; }
   const WavelengthGrid& wavelengths() const noexcept { return grid_; }
@@ -74,6 +78,8 @@ class Twin {
   BsdfPtr sample_;
   BsdfPtr reference_;
   WavelengthGrid grid_;
+  struct FixedReference;
+  std::shared_ptr<FixedReference> fixed_;  // calibration reading of the fixed mode, cached
 };
 
 }  // namespace gonio::twin

@@ -1,0 +1,311 @@
+// The twin's flux estimators: randomised QMC with MIS (rqmc) and the founding paper's
+// plain Monte Carlo over pupil and detector (baseline). See estimator.hpp for the integral.
+#include "core/estimator.hpp"
+
+#include <algorithm>
+#include <limits>
+
+#include "core/sobol.hpp"
+
+namespace gonio::twin::detail {
+namespace {
+
+Vec3 source_axis(double theta, double phi) {
+  return {-std::sin(theta) * std::cos(phi), -std::sin(theta) * std::sin(phi), std::cos(theta)};
+}
+
+// The reference white is a reflector; in a transmission geometry it is read as a perfect
+// transmitting diffuser would be, i.e. with ωo mirrored through the sample plane.
+Vec3 reference_wo(const Vec3& wo) { return {wo.x, wo.y, std::abs(wo.z)}; }
+
+double channel_mean(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return v.empty() ? 0 : s / static_cast<double>(v.size());
+}
+
+// MIS weights (divided by the pdf) for a candidate drawn by the aperture strategy (first)
+// and by the BSDF strategy (second): the balance heuristic, cut off where one density is
+// under a tenth of the other (Veach 1997, §9.2.4). The cutoff matters: a Lambertian white
+// puts ~1e-3 of its BSDF samples into a 2° aperture, and without it those rare hits would
+// carry a share of the estimate that small runs almost never see.
+struct MisWeights {
+  double aperture = 0, bsdf = 0;
+};
+MisWeights mis_weights(double pdf_aperture, double pdf_bsdf) {
+  constexpr double kCutoff = 0.1;
+  if (pdf_bsdf < kCutoff * pdf_aperture) return {1.0 / pdf_aperture, 0.0};
+  if (pdf_aperture < kCutoff * pdf_bsdf) return {0.0, 1.0 / pdf_bsdf};
+  const double w = 1.0 / (pdf_aperture + pdf_bsdf);
+  return {w, w};
+}
+
+double signed_receive_angle(const Vec3& w, double phi) {
+  // θr signed in the receiver's plane of measurement (DESIGN §2), degrees.
+  const double in_plane = w.x * std::cos(phi) + w.y * std::sin(phi);
+  return std::atan2(in_plane, w.z) * kRadToDeg;
+}
+
+}  // namespace
+
+MeasurementSetup make_setup(const InstrumentProfile& profile, const Geometry& nominal) {
+  MeasurementSetup s;
+  const double ti = (nominal.theta_i + profile.arms.incidence_offset_deg) * kDegToRad;
+  const double tr = (nominal.theta_r + profile.arms.receive_offset_deg) * kDegToRad;
+  const double pi = nominal.phi_i * kDegToRad, pr = nominal.phi_r * kDegToRad;
+  s.source = arm_frame(source_axis(ti, pi), pi);
+  s.receiver = arm_frame({std::sin(tr) * std::cos(pr), std::sin(tr) * std::sin(pr), std::cos(tr)}, pr);
+  s.source_aperture = Aperture::from(profile.source.aperture_deg, profile.source.aperture_shape);
+  s.receiver_aperture =
+      Aperture::from(profile.receiver.aperture_deg, profile.receiver.aperture_shape);
+  s.beam = Footprint(s.source, profile.source.beam_mm, profile.source.beam_shape);
+  s.field = Footprint(s.receiver, profile.receiver.field_mm, profile.receiver.field_shape);
+  s.sample_mm = profile.sample_mm;
+  s.reference_mm = profile.reference_mm;
+  s.transmission = s.receiver.a.z < 0;
+  s.receive_phi = pr;
+  return s;
+}
+
+FluxEstimator::FluxEstimator(const MeasurementSetup& setup, const Bsdf& sample,
+                             const Bsdf* reference, EstimatorKind kind, std::uint64_t seed,
+                             int replicates)
+    : setup_(setup), sample_(sample), reference_(reference), kind_(kind), seed_(seed),
+      replicates_(replicates), channels_(sample.channels()),
+      sums_(static_cast<std::size_t>(replicates) * channels_, 0.0),
+      ref_sums_(static_cast<std::size_t>(replicates) * channels_, 0.0) {}
+
+void FluxEstimator::run_until(std::uint64_t n) {
+  if (n <= n_) return;
+  for (int r = 0; r < replicates_; ++r) {
+    if (kind_ == EstimatorKind::rqmc)
+      run_rqmc(r, n_, n);
+    else
+      run_baseline(r, n_, n);
+  }
+  n_ = n;
+}
+
+Diagnostics FluxEstimator::diagnostics() const {
+  Diagnostics d;
+  // The baseline samples sample-plane points, not footprints: it cannot tell.
+  if (kind_ == EstimatorKind::baseline)
+    d.seen_fraction = std::numeric_limits<double>::quiet_NaN();
+  else if (w_lit_ > 0)
+    d.seen_fraction = w_seen_ / w_lit_;
+  if (w_sum_ > 0) {
+    d.mean_theta_i = w_theta_i_ / w_sum_;
+    d.mean_theta_r = w_theta_r_ / w_sum_;
+  }
+  return d;
+}
+
+// Per-point scratch and the additions into one replicate's sums.
+struct FluxEstimator::Accumulator {
+  FluxEstimator& e;
+  double* sample_sum;
+  double* ref_sum;
+  std::vector<double> f, fr;
+  std::vector<DeltaLobe> lobes;
+
+  Accumulator(FluxEstimator& est, int r)
+      : e(est), sample_sum(&est.sums_[static_cast<std::size_t>(r) * est.channels_]),
+        ref_sum(&est.ref_sums_[static_cast<std::size_t>(r) * est.channels_]),
+        f(est.channels_), fr(est.channels_) {}
+
+  // Adds w·seen·f to the sample sums; `lit` is the lit footprint on the sample for the
+  // same directions (diagnostics: which fraction of it the receiver sees).
+  void add_sample(double w, double seen, double lit, const Vec3& wi, const Vec3& wo,
+                  const std::vector<double>& values) {
+    const double ws = w * seen;
+    for (std::size_t c = 0; c < e.channels_; ++c) sample_sum[c] += ws * values[c];
+    const double m = w * channel_mean(values);
+    if (!(m > 0)) return;
+    e.w_seen_ += m * seen;
+    e.w_lit_ += m * lit;
+    if (!(seen > 0)) return;
+    e.w_sum_ += m * seen;
+    e.w_theta_i_ += m * seen * std::acos(std::clamp(wi.z, -1.0, 1.0)) * kRadToDeg;
+    e.w_theta_r_ += m * seen * signed_receive_angle(wo, e.setup_.receive_phi);
+  }
+  void add_reference(double w, const std::vector<double>& values) {
+    for (std::size_t c = 0; c < e.channels_; ++c) ref_sum[c] += w * values[c];
+  }
+};
+
+void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
+  const auto& table = SobolTable::get(end);
+  std::uint32_t scramble[kSobolDims];
+  for (int d = 0; d < kSobolDims; ++d)
+    scramble[d] = static_cast<std::uint32_t>(
+        mix64(seed_ ^ mix64(static_cast<std::uint64_t>(r) * 64 + static_cast<std::uint64_t>(d))));
+
+  const auto& S = setup_;
+  const double src_area = S.source_aperture.tangent_area();
+  const double rcv_area = S.receiver_aperture.tangent_area();
+  const Polygon sample_plate = Polygon::rectangle(0.5 * S.sample_mm.in_plane, 0.5 * S.sample_mm.perpendicular);
+  const Polygon ref_plate = Polygon::rectangle(0.5 * S.reference_mm.in_plane, 0.5 * S.reference_mm.perpendicular);
+  const bool same_plates = S.sample_mm == S.reference_mm;
+  Accumulator acc(*this, r);
+  const bool sample_delta = sample_.has_delta();
+  const bool ref_delta = reference_ && reference_->has_delta();
+
+  for (std::uint64_t i = begin; i < end; ++i) {
+    double u[kSobolDims];
+    for (int d = 0; d < kSobolDims; ++d)
+      u[d] = to_unit(owen_scramble(table[i * kSobolDims + static_cast<std::uint64_t>(d)], scramble[d]));
+
+    const auto od = direction_from_tangent(S.receiver, aperture_point(S.receiver_aperture, u[0], u[1]));
+    const Vec3 wo = od.w;
+    const double cos_o = std::abs(wo.z);
+    if (cos_o <= 0) continue;
+    const double inv_pdf_o = rcv_area * od.cos_gamma3;
+    const Vec3 wo_ref = reference_wo(wo);
+
+    Polygon seen = sample_plate;
+    S.field.clip_to(seen, wo);
+    Polygon seen_ref = ref_plate;
+    if (reference_) {
+      if (same_plates)
+        seen_ref = seen;
+      else
+        S.field.clip_to(seen_ref, wo);
+    }
+
+    // Area lit along wi within a seen region; the lit footprint on the sample (diagnostics).
+    const auto lit_area = [&S](const Polygon& region, const Vec3& wi) {
+      Polygon p = region;
+      S.beam.clip_to(p, wi);
+      return p.area();
+    };
+    const auto footprint_area = [&](const Vec3& wi) { return lit_area(sample_plate, wi); };
+
+    // One candidate source direction wi with its MIS weight for the sample and reference.
+    const auto contribute = [&](const Vec3& wi, double w_sample, double w_ref) {
+      const double base = std::abs(wi.z) * cos_o * inv_pdf_o;
+      double a_sample = -1;
+      if (w_sample > 0) {
+        a_sample = seen.n >= 3 ? lit_area(seen, wi) : 0.0;
+        const double lit = footprint_area(wi);
+        if (lit > 0) {
+          sample_.eval(wi, wo, acc.f);
+          acc.add_sample(base * w_sample, a_sample, lit, wi, wo, acc.f);
+        }
+      }
+      if (reference_ && w_ref > 0 && seen_ref.n >= 3) {
+        const double a = !same_plates ? lit_area(seen_ref, wi)
+                         : a_sample >= 0 ? a_sample : lit_area(seen, wi);
+        if (a > 0) {
+          reference_->eval(wi, wo_ref, acc.fr);
+          acc.add_reference(base * a * w_ref, acc.fr);
+        }
+      }
+    };
+
+    // Strategy 1: uniform over the source aperture.
+    {
+      const auto id = direction_from_tangent(S.source, aperture_point(S.source_aperture, u[2], u[3]));
+      const double pdf1 = 1.0 / (src_area * id.cos_gamma3);
+      const double pdf2 = sample_.pdf(wo, id.w);
+      const double pdf2r = reference_ ? reference_->pdf(wo_ref, id.w) : 0;
+      contribute(id.w, mis_weights(pdf1, pdf2).aperture, mis_weights(pdf1, pdf2r).aperture);
+    }
+    // Strategy 2: BSDF importance sampling given wo, kept when it lands in the aperture.
+    const auto bsdf_strategy = [&](const Bsdf& bsdf, const Vec3& wo_b, bool for_sample) {
+      const auto s = bsdf.sample_wi(wo_b, u[4], {u[5], u[6]});
+      if (!s || !(s->pdf > 0)) return;
+      Vec2 t;
+      if (!tangent_of(S.source, s->wi, t) || !S.source_aperture.contains_tangent(t)) return;
+      const double cg = dot(s->wi, S.source.a);
+      const double pdf1 = 1.0 / (src_area * cg * cg * cg);
+      const double w = mis_weights(pdf1, s->pdf).bsdf;
+      if (w == 0) return;
+      if (for_sample)
+        contribute(s->wi, w, 0);
+      else
+        contribute(s->wi, 0, w);
+    };
+    bsdf_strategy(sample_, wo, true);
+    if (reference_) bsdf_strategy(*reference_, wo_ref, false);
+
+    // Ideal specular paths, exactly.
+    const auto delta = [&](const Bsdf& bsdf, const Vec3& wo_b, bool for_sample) {
+      bsdf.delta_lobes(wo_b, acc.lobes);
+      for (const auto& lobe : acc.lobes) {
+        Vec2 t;
+        if (!tangent_of(S.source, lobe.wi, t) || !S.source_aperture.contains_tangent(t)) continue;
+        const Polygon& region = for_sample ? seen : seen_ref;
+        const double a = region.n >= 3 ? lit_area(region, lobe.wi) : 0.0;
+        const double w = cos_o * inv_pdf_o;
+        if (for_sample)
+          acc.add_sample(w, a, footprint_area(lobe.wi), lobe.wi, wo, lobe.weight);
+        else if (a > 0)
+          acc.add_reference(w * a, lobe.weight);
+      }
+    };
+    if (sample_delta) delta(sample_, wo, true);
+    if (ref_delta) delta(*reference_, wo_ref, false);
+  }
+}
+
+void FluxEstimator::run_baseline(int r, std::uint64_t begin, std::uint64_t end) {
+  const auto& S = setup_;
+  const double src_area = S.source_aperture.tangent_area();
+  const double rcv_weight = S.receiver_aperture.tangent_area() * S.field.cross_section_area();
+  const auto on_plate = [](const Extent& e, const Vec2& x) {
+    return std::abs(x.x) <= 0.5 * e.in_plane && std::abs(x.y) <= 0.5 * e.perpendicular;
+  };
+  Accumulator acc(*this, r);
+  const std::uint64_t stream = mix64(seed_ ^ (0xba5e11e5ull + static_cast<std::uint64_t>(r)));
+
+  for (std::uint64_t i = begin; i < end; ++i) {
+    double u[6];
+    for (int d = 0; d < 6; ++d)
+      u[d] = to_unit(static_cast<std::uint32_t>(mix64(stream ^ mix64(i * 8 + static_cast<std::uint64_t>(d))) >> 32));
+
+    // A detector point fixes the direction (ideal lens); a pupil point fixes the ray.
+    const auto od = direction_from_tangent(S.receiver, aperture_point(S.receiver_aperture, u[0], u[1]));
+    const Vec3 wo = od.w;
+    if (wo.z == 0) continue;
+    const double cos_gamma = dot(wo, S.receiver.a);
+    const double w_o = rcv_weight * od.cos_gamma3 * cos_gamma;  // (n·v)^4 / pdf
+    const Vec2 pp = S.field.point(u[2], u[3]);
+    const Vec3 o = S.receiver.t * pp.x + S.receiver.p * pp.y;
+    const Vec3 hit = o - wo * (o.z / wo.z);
+    const Vec2 x{hit.x, hit.y};
+    const bool on_sample = on_plate(S.sample_mm, x);
+    const bool on_ref = reference_ && on_plate(S.reference_mm, x);
+    if (!on_sample && !on_ref) continue;
+    const Vec3 wo_ref = reference_wo(wo);
+
+    const auto id = direction_from_tangent(S.source, aperture_point(S.source_aperture, u[4], u[5]));
+    const Vec3 wi = id.w;
+    if (S.beam.contains(x, wi)) {
+      const double w = std::abs(wi.z) * src_area * id.cos_gamma3 * w_o;
+      if (on_sample) {
+        sample_.eval(wi, wo, acc.f);
+        acc.add_sample(w, 1, 0, wi, wo, acc.f);
+      }
+      if (on_ref) {
+        reference_->eval(wi, wo_ref, acc.fr);
+        acc.add_reference(w, acc.fr);
+      }
+    }
+    const auto delta = [&](const Bsdf& bsdf, const Vec3& wo_b, bool for_sample) {
+      bsdf.delta_lobes(wo_b, acc.lobes);
+      for (const auto& lobe : acc.lobes) {
+        Vec2 t;
+        if (!tangent_of(S.source, lobe.wi, t) || !S.source_aperture.contains_tangent(t)) continue;
+        if (!S.beam.contains(x, lobe.wi)) continue;
+        if (for_sample)
+          acc.add_sample(w_o, 1, 0, lobe.wi, wo, lobe.weight);
+        else
+          acc.add_reference(w_o, lobe.weight);
+      }
+    };
+    if (on_sample && sample_.has_delta()) delta(sample_, wo, true);
+    if (on_ref && reference_->has_delta()) delta(*reference_, wo_ref, false);
+  }
+}
+
+}  // namespace gonio::twin::detail

@@ -1,0 +1,183 @@
+// The instrument's optics as geometry: arm frames, angular apertures and the footprints of
+// the beam and of the receiver's field on the sample plane.
+//
+// Each arm has a frame (axis a from the sample centre toward the arm, t in the arm's plane
+// of measurement, p across it). A direction inside an angular aperture is parametrised by
+// tangent-plane coordinates: ω = normalize(a + tx·t + ty·p); a rectangular aperture of full
+// angles (A, B) is |tx| ≤ tan(A/2), |ty| ≤ tan(B/2), and dω = cos³γ dtx dty (γ = angle to a).
+//
+// A cross-section (the beam, or the receiver's entrance pupil) is a shape in the plane
+// through the sample centre perpendicular to the axis. A sample-plane point x belongs to
+// it for a ray direction ω when x projected along ω onto that plane falls inside: on the
+// sample plane that is a parallelogram (an ellipse for elliptical shapes), so the region
+// seen and lit for given directions is an intersection of convex sets whose area we get
+// exactly by clipping (ellipses are 64-gons with the ellipse's area).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstddef>
+
+#include "gonio/twin/instrument.hpp"
+#include "gonio/twin/vec.hpp"
+
+namespace gonio::twin::detail {
+
+struct ArmFrame {
+  Vec3 a, t, p;
+};
+
+// Frame of an arm pointing along `axis`, with azimuth phi (radians) of its plane of
+// measurement; p = (−sin φ, cos φ, 0) is defined even at normal incidence.
+inline ArmFrame arm_frame(const Vec3& axis, double phi) noexcept {
+  const Vec3 p{-std::sin(phi), std::cos(phi), 0};
+  return {axis, normalize(cross(p, axis)), p};
+}
+
+struct Aperture {
+  double tx = 0, ty = 0;  // tangent of the half angles
+  bool ellipse = false;
+
+  static Aperture from(const Extent& full_angles_deg, ApertureShape shape) noexcept {
+    return {std::tan(0.5 * full_angles_deg.in_plane * kDegToRad),
+            std::tan(0.5 * full_angles_deg.perpendicular * kDegToRad),
+            shape == ApertureShape::ellipse};
+  }
+  double tangent_area() const noexcept { return ellipse ? kPi * tx * ty : 4 * tx * ty; }
+  bool contains_tangent(double x, double y) const noexcept {
+    if (ellipse) return (x / tx) * (x / tx) + (y / ty) * (y / ty) <= 1;
+    return std::abs(x) <= tx && std::abs(y) <= ty;
+  }
+  bool contains_tangent(Vec2 t) const noexcept { return contains_tangent(t.x, t.y); }
+};
+
+// Uniform point in the unit square mapped onto an aperture's tangent region.
+inline Vec2 aperture_point(const Aperture& ap, double u0, double u1) noexcept {
+  if (!ap.ellipse) return {(2 * u0 - 1) * ap.tx, (2 * u1 - 1) * ap.ty};
+  // Shirley–Chiu concentric mapping of the square onto the disk (area preserving).
+  const double a = 2 * u0 - 1, b = 2 * u1 - 1;
+  if (a == 0 && b == 0) return {0, 0};
+  double r, phi;
+  if (std::abs(a) > std::abs(b)) {
+    r = a, phi = (kPi / 4) * (b / a);
+  } else {
+    r = b, phi = (kPi / 2) - (kPi / 4) * (a / b);
+  }
+  return {r * std::cos(phi) * ap.tx, r * std::sin(phi) * ap.ty};
+}
+
+struct ApertureDirection {
+  Vec3 w;
+  double cos_gamma3 = 0;  // cos³γ: dω = cos³γ dt
+};
+
+inline ApertureDirection direction_from_tangent(const ArmFrame& f, Vec2 t) noexcept {
+  const double inv = 1.0 / std::sqrt(1 + t.x * t.x + t.y * t.y);
+  return {(f.a + t.x * f.t + t.y * f.p) * inv, inv * inv * inv};
+}
+
+// Tangent coordinates of ω in the frame; false when ω points away from the arm.
+inline bool tangent_of(const ArmFrame& f, const Vec3& w, Vec2& out) noexcept {
+  const double c = dot(w, f.a);
+  if (c <= 0) return false;
+  out = {dot(w, f.t) / c, dot(w, f.p) / c};
+  return true;
+}
+
+// A convex polygon on the sample plane with a fixed capacity.
+struct Polygon {
+  static constexpr std::size_t kMax = 160;
+  std::array<Vec2, kMax> v;
+  std::size_t n = 0;
+
+  static Polygon rectangle(double half_x, double half_y) noexcept {
+    Polygon p;
+    p.v[0] = {-half_x, -half_y};
+    p.v[1] = {half_x, -half_y};
+    p.v[2] = {half_x, half_y};
+    p.v[3] = {-half_x, half_y};
+    p.n = 4;
+    return p;
+  }
+  double area() const noexcept {
+    double s = 0;
+    for (std::size_t i = 0, j = n - 1; i < n; j = i++) s += v[j].x * v[i].y - v[i].x * v[j].y;
+    return n < 3 ? 0 : 0.5 * std::abs(s);
+  }
+};
+
+// Keeps the part of `poly` where g·x ≤ c (Sutherland–Hodgman against one half-plane).
+inline void clip(Polygon& poly, Vec2 g, double c) noexcept {
+  if (poly.n == 0) return;
+  Polygon out;
+  for (std::size_t i = 0; i < poly.n; ++i) {
+    const Vec2 a = poly.v[i];
+    const Vec2 b = poly.v[(i + 1) % poly.n];
+    const double da = g.x * a.x + g.y * a.y - c;
+    const double db = g.x * b.x + g.y * b.y - c;
+    if (da <= 0) out.v[out.n++] = a;
+    if ((da < 0 && db > 0) || (da > 0 && db < 0)) {
+      const double s = da / (da - db);
+      out.v[out.n++] = {a.x + s * (b.x - a.x), a.y + s * (b.y - a.y)};
+    }
+    if (out.n + 2 > Polygon::kMax) break;  // cannot happen for convex inputs within capacity
+  }
+  poly = out;
+}
+
+// The footprint on the sample plane of a cross-section of an arm, for rays along ω.
+class Footprint {
+ public:
+  Footprint() = default;
+  Footprint(const ArmFrame& f, const Extent& size_mm, ApertureShape shape)
+      : frame_(f), hx_(0.5 * size_mm.in_plane), hy_(0.5 * size_mm.perpendicular),
+        ellipse_(shape == ApertureShape::ellipse) {}
+
+  // Clips `poly` to the footprint for rays along ω (ω·a > 0).
+  void clip_to(Polygon& poly, const Vec3& w) const noexcept {
+    // X(x) = x·t − (ω·t)(x·a)/(ω·a) on the plane z = 0, likewise Y with p.
+    const double wa = dot(w, frame_.a);
+    const double kt = dot(w, frame_.t) / wa, kp = dot(w, frame_.p) / wa;
+    const Vec2 gt{frame_.t.x - frame_.a.x * kt, frame_.t.y - frame_.a.y * kt};
+    const Vec2 gp{frame_.p.x - frame_.a.x * kp, frame_.p.y - frame_.a.y * kp};
+    if (!ellipse_) {
+      clip(poly, gt, hx_);
+      clip(poly, {-gt.x, -gt.y}, hx_);
+      clip(poly, gp, hy_);
+      clip(poly, {-gp.x, -gp.y}, hy_);
+      return;
+    }
+    // Ellipse (X/hx)² + (Y/hy)² ≤ 1 as a circumscribed-and-shrunk 64-gon of equal area:
+    // half-planes cos(θk)·X/hx + sin(θk)·Y/hy ≤ r with r chosen for equal area.
+    constexpr int kSides = 64;
+    const double r = std::sqrt(kPi / (kSides * std::tan(kPi / kSides)));
+    for (int k = 0; k < kSides; ++k) {
+      const double th = 2 * kPi * k / kSides;
+      const double cx = std::cos(th) / hx_, cy = std::sin(th) / hy_;
+      clip(poly, {cx * gt.x + cy * gp.x, cx * gt.y + cy * gp.y}, r);
+    }
+  }
+  // Whether the sample-plane point x lies in the footprint for rays along ω.
+  bool contains(const Vec2& x, const Vec3& w) const noexcept {
+    const double wa = dot(w, frame_.a);
+    const double X = x.x * frame_.t.x + x.y * frame_.t.y -
+                     dot(w, frame_.t) * (x.x * frame_.a.x + x.y * frame_.a.y) / wa;
+    const double Y = x.x * frame_.p.x + x.y * frame_.p.y -
+                     dot(w, frame_.p) * (x.x * frame_.a.x + x.y * frame_.a.y) / wa;
+    if (ellipse_) return (X / hx_) * (X / hx_) + (Y / hy_) * (Y / hy_) <= 1;
+    return std::abs(X) <= hx_ && std::abs(Y) <= hy_;
+  }
+  double cross_section_area() const noexcept { return ellipse_ ? kPi * hx_ * hy_ : 4 * hx_ * hy_; }
+  // Uniform point of the cross-section, in the arm frame's (t, p) coordinates.
+  Vec2 point(double u0, double u1) const noexcept {
+    return aperture_point(Aperture{hx_, hy_, ellipse_}, u0, u1);
+  }
+  const ArmFrame& frame() const noexcept { return frame_; }
+
+ private:
+  ArmFrame frame_{};
+  double hx_ = 0, hy_ = 0;
+  bool ellipse_ = false;
+};
+
+}  // namespace gonio::twin::detail
