@@ -1,0 +1,28 @@
+// open_transport: the transport factory used by the registry and gonio-probe.
+#include <fmt/format.h>
+
+#include "gonio/drivers/serial.hpp"
+#include "gonio/drivers/transport_tcp.hpp"
+#include "gonio/drivers/usbtmc.hpp"
+#include "gonio/proto/error.hpp"
+#include "gonio/proto/json_util.hpp"
+
+namespace gonio::drivers {
+
+TransportPtr open_transport(std::string_view type, json_util::ObjectReader& r) {
+  if (type == "serial") return open_serial(SerialConfig::read(r));
+  if (type == "tcp") return open_tcp(TcpConfig::read(r));
+  if (type == "usbtmc") {
+    usbtmc::DeviceSelector sel;
+    sel = usbtmc::DeviceSelector::parse(r.required<std::string>("usb"));
+    usbtmc::Options opt;
+    const auto max = r.optional<long long>("max_transfer", opt.max_transfer);
+    if (max < 4 || max > (1 << 20))
+      throw Error::out_of_range(r.path("max_transfer"), static_cast<double>(max), 4, 1 << 20, " bytes");
+    opt.max_transfer = static_cast<std::uint32_t>(max);
+    return std::make_unique<usbtmc::UsbtmcTransport>(usbtmc::open_libusb(sel), opt);
+  }
+  throw Error::invalid("transport", fmt::format("'{}' is not a transport (allowed: serial, tcp, usbtmc)", type));
+}
+
+}  // namespace gonio::drivers
