@@ -1,0 +1,92 @@
+// Readers and writers of tabulated BSDF files; what each format holds and how its angles map
+// onto the sample frame is in twin/bsdf_formats.md.
+//
+//   .bsdf    Zemax / Radiant Imaging IS-SA "BSDF Data Interchange" text (one BRDF or BTDF,
+//            specular parametrization, Monochrome or XYZ)
+//   .ssdd    Surface Scattering Distribution Data (libbsdf's format: BRDF, BTDF, specular
+//            reflectance and transmittance, any parametrization, ASCII or binary data)
+//   .binary  MERL BRDF database (Matusik et al. 2003): isotropic RGB BRDF in half-difference
+//            angles, read-only
+//
+// Every reader rejects malformed input with gonio::Error(parse_error) whose message starts
+// with "<source>:<line>:" (or the byte offset for binary data) and never trusts a size from
+// a header: storage grows only with data actually read, under BsdfTable::kMaxValues.
+// Features a reader recognises but cannot represent raise Error(unsupported); files that
+// cannot be opened raise Error(not_found) or Error(io_error).
+#pragma once
+
+#include <array>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "gonio/twin/tabulated.hpp"
+
+namespace gonio::twin {
+
+// MERL and SSDD `rgb` data become a three-point spectrum at the dominant wavelengths of the
+// sRGB primaries (IEC 61966-2-1 chromaticities, D65 white, CIE 1931 2° locus), nm, in the
+// order blue, green, red. See bsdf_formats.md.
+inline constexpr std::array<double, 3> kRgbWavelengthsNm{464.3, 549.1, 611.5};
+
+// ---- Zemax / Radiant IS-SA ---------------------------------------------------------------
+// Returns a specular-parametrization table in `brdf` or `btdf` (ScatterType). Monochrome
+// data are grey; XYZ data keep their Y (luminance factor) as a grey table.
+TabulatedParts read_issa(std::istream& in, std::string_view source = "<stream>");
+TabulatedParts read_issa(const std::string& path);
+
+struct IssaWriteOptions {
+  // The file's grid, degrees. Empty: the table's own axes when it is a specular table;
+  // otherwise incidence = the table's θi (spherical) or 0:80:10, azimuth 0:180:5
+  // (PlaneSymmetrical) or 0:355:5, radial a list refined near the specular direction.
+  std::vector<double> incidence, azimuth, radial;
+  // Monochrome content: the weighted mean of the table's channels (weights normalised to
+  // sum 1; empty = plain mean).
+  std::vector<double> weights;
+  // XYZ content instead: X, Y, Z = Σ weight·f over the table's channels, weights as given
+  // (e.g. CIE colour-matching functions times an illuminant, normalised so that Y of a
+  // non-selective table equals its value).
+  std::optional<std::array<std::vector<double>, 3>> xyz_weights;
+  std::string comment;  // written as '#' lines at the top
+};
+// Writes one table (BRDF, or BTDF when `transmission`). Values are f in sr⁻¹; TIS per angle
+// of incidence is the table's directional-hemispherical integral.
+void write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
+                const IssaWriteOptions& options = {});
+void write_issa(const std::string& path, const BsdfTable& table, bool transmission,
+                const IssaWriteOptions& options = {});
+
+// ---- SSDD ----------------------------------------------------------------------------------
+TabulatedParts read_ssdd(std::istream& in, std::string_view source = "<stream>");
+TabulatedParts read_ssdd(const std::string& path);
+
+enum class SsddData { ascii, binary };
+struct SsddWriteOptions {
+  SsddData data = SsddData::ascii;  // binary = IEEE 754 float32, little-endian
+  std::string comment;              // '#' lines before VERSION
+  std::string software = "gonio";   // SOFTWARE entry (empty: omitted)
+  std::string date;                 // DATE entry, YYYY-MM-DD (empty: omitted)
+};
+// Writes every part present. Grey tables are `monochrome`, others `spectrum`.
+void write_ssdd(std::ostream& out, const TabulatedParts& parts, const SsddWriteOptions& options = {});
+void write_ssdd(const std::string& path, const TabulatedParts& parts,
+                const SsddWriteOptions& options = {});
+
+// ---- MERL ------------------------------------------------------------------------------------
+// Header of three little-endian int32 (θh, θd, φd resolution: 90, 90, 180 in the database),
+// then R, G, B blocks of doubles scaled by 1/1500, 1.15/1500, 1.66/1500. Other resolutions
+// are read with the same mapping (θh nodes at 90°·(k/n)², θd at 90°·k/n, φd at 180°·k/n).
+// Negative entries, the database's mark of unmeasured samples, become 0.
+TabulatedParts read_merl(std::istream& in, std::string_view source = "<stream>");
+TabulatedParts read_merl(const std::string& path);
+
+// ---- by extension ---------------------------------------------------------------------------
+// .bsdf → read_issa, .ssdd → read_ssdd, .binary → read_merl (case-insensitive).
+TabulatedParts read_bsdf_file(const std::string& path);
+// .ssdd → write_ssdd (all parts); .bsdf → write_issa of the single BRDF or BTDF (a file with
+// both, or with specular parts, needs .ssdd: Error(unsupported)).
+void write_bsdf_file(const std::string& path, const TabulatedParts& parts);
+
+}  // namespace gonio::twin

@@ -1,0 +1,215 @@
+// Tabulated BSDFs: measured (or virtually measured) scattering functions kept as tables.
+//
+// A BsdfTable is one scattering function — a BRDF or a BTDF — sampled on a 4-D angular grid,
+// per wavelength of the table, in one of the three parametrizations of the SSDD format
+// (libbsdf doc/SsddFileFormatSpecification.md, "Parameterization types"). Angles in degrees:
+//
+//   spherical        p0 θi  p1 φi  p2 θo                                    p3 φo
+//   specular         p0 θi  p1 φi  p2 angle between wo and the specular     p3 azimuth of wo
+//                                     direction of wi ("radial")                about it
+//   half_difference  p0 θh  p1 φh  p2 θd                                    p3 φd
+//                    (Rusinkiewicz 1998, "A New Change of Variables for Efficient BRDF
+//                    Representation")
+//
+// Frame (DESIGN §2): normal +z, wi toward the source, wo toward the receiver, both pointing
+// away from the surface. An empty p1 makes the table isotropic: wi is taken at azimuth 0 and
+// p3 is relative to it, so p3 = 180° is the forward (specular) side of the plane of incidence
+// and p3 = 0° the backward side. For the instrument's in-plane geometry (wi = (−sin θi, 0,
+// cos θi), wr = (sin θr, 0, cos θr)) that is φo = 180° for θr > 0 and φo = 0° for θr < 0.
+// In the specular parametrization azimuth 0 points from the specular direction toward the
+// normal and grows counter-clockwise seen from above (+z), as in the Zemax/Radiant IS-SA
+// format. A BTDF describes wo in its mirror image through the sample plane (θo measured from
+// −z); the straight-through direction −wi then plays the role of the specular direction.
+//
+// Values are f in sr⁻¹ (no cosine factor), finite and >= 0, stored with the channel fastest
+// and p0 next, as in SSDD: values[((((i3·n2 + i2)·n1 + i1)·n0 + i0)·channels + c].
+// Reductions: `bilateral` — p3 covers one side of the plane of incidence ([0, 180], or
+// [0, 90] for a reciprocal half-difference table) and is mirrored; `reciprocal` — only for
+// half_difference: φd and φd + 180° are the same sample (MERL's layout).
+//
+// Interpolation is multilinear in (p0, p1, p2, p3): polar axes clamp beyond their first and
+// last node, azimuth axes wrap around (or mirror, with `bilateral`).
+//
+// TabulatedBsdf (below) is the Bsdf built from a BRDF and/or BTDF table plus optional
+// specular reflectance / transmittance tables (ideal specular parts, served as delta lobes).
+// Data are resampled onto the model's wavelength grid at construction (linear in λ,
+// constant beyond the table's ends; a table without wavelengths is grey). The table
+// describes the front side; light arriving from below (wi.z < 0) is evaluated in the mirror
+// image through the sample plane (a two-sided sample).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "gonio/twin/bsdf.hpp"
+
+namespace gonio::twin {
+
+enum class TableParam { spherical, specular, half_difference };
+
+std::string_view to_string(TableParam p) noexcept;
+
+struct TableReduction {
+  bool bilateral = false;
+  bool reciprocal = false;
+  friend bool operator==(const TableReduction&, const TableReduction&) = default;
+};
+
+class BsdfTable {
+ public:
+  // Upper bound on nodes × channels, so that no file can make us allocate without limit.
+  static constexpr std::size_t kMaxValues = std::size_t{1} << 26;
+  static constexpr std::size_t kMaxNodes = 100000;  // per axis
+
+  struct Axes {
+    std::vector<double> p0, p1, p2, p3;  // degrees; p1 empty = isotropic
+    friend bool operator==(const Axes&, const Axes&) = default;
+  };
+
+  BsdfTable() = default;
+  // Validates everything (Error naming the offending field: "table.p2[3]", "table.values[17]").
+  BsdfTable(TableParam param, Axes axes, std::vector<double> wavelengths_nm,
+            std::vector<double> values, TableReduction reduction = {});
+
+  TableParam param() const noexcept { return param_; }
+  const Axes& axes() const noexcept { return axes_; }
+  const std::vector<double>& axis(int k) const;  // k = 0..3
+  // Nodes along axis k as used by the interpolation (an isotropic table has one p1 node, 0).
+  std::size_t nodes(int k) const noexcept;
+  bool isotropic() const noexcept { return axes_.p1.empty(); }
+  const TableReduction& reduction() const noexcept { return reduction_; }
+  const std::vector<double>& wavelengths() const noexcept { return nm_; }
+  std::size_t channels() const noexcept { return nm_.empty() ? 1 : nm_.size(); }
+  const std::vector<double>& values() const noexcept { return values_; }
+  std::size_t index(std::size_t i0, std::size_t i1, std::size_t i2, std::size_t i3) const noexcept;
+  double at(std::size_t i0, std::size_t i1, std::size_t i2, std::size_t i3, std::size_t c) const {
+    return values_[index(i0, i1, i2, i3) * channels() + c];
+  }
+  bool empty() const noexcept { return values_.empty(); }
+
+  // Parameter coordinates (degrees) of a direction pair; wi and wo unit vectors with
+  // wi.z >= 0 and wo.z >= 0 (a BTDF's wo already mirrored through the sample plane).
+  std::array<double, 4> coords(const Vec3& wi, const Vec3& wo) const noexcept;
+  // Multilinear interpolation at parameter coordinates, every channel (out.size() == channels()).
+  void interpolate(const std::array<double, 4>& p, std::span<double> out) const noexcept;
+  // f(wi, wo) for every channel: interpolate(coords(wi, wo)).
+  void eval(const Vec3& wi, const Vec3& wo, std::span<double> out) const noexcept;
+
+  // The same table on other wavelengths (empty = grey: the channel mean).
+  BsdfTable resampled(const std::vector<double>& nm) const;
+  // Grey table holding a weighted sum of channels (weights.size() == channels()).
+  BsdfTable weighted(std::span<const double> weights) const;
+
+  friend bool operator==(const BsdfTable&, const BsdfTable&) = default;
+
+ private:
+  TableParam param_ = TableParam::spherical;
+  Axes axes_;
+  std::vector<double> nm_;
+  std::vector<double> values_;
+  TableReduction reduction_;
+};
+
+// Reflectance (or transmittance) of an ideal specular part per incidence direction:
+// p0 θi, p1 φi (empty = isotropic), values[(i1·n0 + i0)·channels + c] in [0, 1].
+class SpecularTable {
+ public:
+  SpecularTable() = default;
+  SpecularTable(std::vector<double> theta_i, std::vector<double> phi_i,
+                std::vector<double> wavelengths_nm, std::vector<double> values);
+
+  const std::vector<double>& theta_i() const noexcept { return theta_; }
+  const std::vector<double>& phi_i() const noexcept { return phi_; }
+  const std::vector<double>& wavelengths() const noexcept { return nm_; }
+  std::size_t channels() const noexcept { return nm_.empty() ? 1 : nm_.size(); }
+  const std::vector<double>& values() const noexcept { return values_; }
+  // Linear in θi (clamped), periodic in φi; degrees.
+  void interpolate(double theta_deg, double phi_deg, std::span<double> out) const noexcept;
+  SpecularTable resampled(const std::vector<double>& nm) const;
+  SpecularTable weighted(std::span<const double> weights) const;
+
+  friend bool operator==(const SpecularTable&, const SpecularTable&) = default;
+
+ private:
+  std::vector<double> theta_, phi_, nm_, values_;
+};
+
+// Everything a tabulated file can hold. At least one member is set.
+struct TabulatedParts {
+  std::optional<BsdfTable> brdf;
+  std::optional<BsdfTable> btdf;
+  std::optional<SpecularTable> specular_reflectance;
+  std::optional<SpecularTable> specular_transmittance;
+  std::string name;  // free text from the file, may be empty
+
+  bool empty() const noexcept {
+    return !brdf && !btdf && !specular_reflectance && !specular_transmittance;
+  }
+  friend bool operator==(const TabulatedParts&, const TabulatedParts&) = default;
+};
+
+// A spherical grid to tabulate on (degrees). With phi_i empty the table is isotropic and
+// phi_o relative to the incidence azimuth (180 = forward); `bilateral` declares phi_o to
+// cover one side of the plane of incidence only.
+struct AngularGrid {
+  std::vector<double> theta_i, phi_i, theta_o, phi_o;
+  bool bilateral = false;
+};
+
+namespace detail {
+class TableSampler;
+}
+
+class TabulatedBsdf final : public Bsdf {
+ public:
+  // Throws Error(invalid_argument) when `parts` is empty or a part breaks its constraints.
+  TabulatedBsdf(const WavelengthGrid& grid, TabulatedParts parts, std::string spec = "tabulated");
+  // From plain arrays: a spherical table on `angles` with values laid out as in BsdfTable
+  // (channel fastest, then θi, φi, θo, φo); `table_nm` empty means grey. Either array may be
+  // empty (no BRDF / no BTDF), not both.
+  TabulatedBsdf(const WavelengthGrid& grid, const AngularGrid& angles,
+                std::vector<double> table_nm, std::vector<double> brdf,
+                std::vector<double> btdf = {}, std::string spec = "tabulated");
+  ~TabulatedBsdf() override;
+
+  // The tables as given, on their own wavelengths (for writers and analysis).
+  const TabulatedParts& parts() const noexcept { return parts_; }
+
+  void eval(const Vec3& wi, const Vec3& wo, std::span<double> out) const override;
+  std::optional<BsdfSample> sample_wi(const Vec3& wo, double u_lobe, Vec2 u) const override;
+  double pdf(const Vec3& wo, const Vec3& wi) const override;
+  void delta_lobes(const Vec3& wo, std::vector<DeltaLobe>& out) const override;
+  bool has_delta() const noexcept override;
+  std::string spec() const override { return spec_; }
+
+  // Channel-mean f, the density the sampler follows (exposed for tests and diagnostics).
+  double eval_mean(const Vec3& wi, const Vec3& wo) const noexcept;
+
+ private:
+  const detail::TableSampler& sampler() const;
+
+  TabulatedParts parts_;   // as given
+  TabulatedParts on_grid_;  // resampled onto wavelengths()
+  std::optional<BsdfTable> brdf_mean_, btdf_mean_;  // grey, for sampling
+  std::string spec_;
+  mutable std::once_flag sampler_once_;
+  mutable std::unique_ptr<detail::TableSampler> sampler_;
+};
+
+// Tabulates `bsdf` on a spherical grid: its BRDF (wi and wo above the sample) or its BTDF
+// (wo below), on the model's own wavelength grid. Non-finite or negative values from the
+// model are reported as Error(internal) naming the node.
+BsdfTable tabulate(const Bsdf& bsdf, const AngularGrid& grid, bool transmission = false);
+// Both parts as requested, plus the model's delta lobes (as specular reflectance /
+// transmittance tables over theta_i) when it has any.
+TabulatedParts tabulate_parts(const Bsdf& bsdf, const AngularGrid& grid, bool reflection = true,
+                              bool transmission = false);
+
+}  // namespace gonio::twin

@@ -1,0 +1,423 @@
+// Zemax / Radiant Imaging IS-SA "BSDF Data Interchange" files (.bsdf): reader and writer.
+//
+// Format: R. Rykowski, "BSDF Data Interchange File Format Specification" (Radiant Imaging /
+// Zemax knowledge base, 2008; now "Zemax Tabular BSDF data file format"): a keyword header
+// (Source, Symmetry, SpectralContent, ScatterType, SampleRotation, AngleOfIncidence,
+// ScatterAzimuth, ScatterRadial, each list preceded by its count), then per spectral
+// channel (Monochrome, or TristimulusX/Y/Z) a DataBegin … DataEnd block holding, for every
+// sample rotation and angle of incidence, a "TIS <value>" line and one line per scatter
+// azimuth with one BSDF value (sr⁻¹) per radial angle. Radial and azimuth angles are taken
+// about the specular direction (the straight-through direction for BTDF); azimuth 0 points
+// from it toward the sample normal, counter-clockwise. PlaneSymmetrical data give azimuths
+// 0…180 only. That is exactly BsdfTable's specular parametrization (bilateral reduction).
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <numeric>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "gonio/proto/error.hpp"
+#include "gonio/proto/text.hpp"
+#include "gonio/twin/bsdf_io.hpp"
+#include "tabulated/common.hpp"
+
+namespace gonio::twin {
+namespace {
+
+enum class Symmetry { plane, asymmetrical, asymmetrical4d };
+
+// Token cursor over the header: lists may continue over several lines.
+class Tokens {
+ public:
+  explicit Tokens(tab::LineReader& r) : r_(r) {}
+  bool next(std::string& tok) {
+    while (pos_ >= toks_.size()) {
+      if (!r_.next_content(line_)) return false;
+      owned_.clear();
+      for (auto t : tab::tokens(line_)) owned_.emplace_back(t);
+      toks_.assign(owned_.begin(), owned_.end());
+      pos_ = 0;
+    }
+    tok = toks_[pos_++];
+    return true;
+  }
+  std::string require(std::string_view what) {
+    std::string t;
+    if (!next(t)) r_.fail(fmt::format("end of file while reading {}", what), what);
+    return t;
+  }
+  // True when the current line has no more tokens.
+  bool line_done() const noexcept { return pos_ >= toks_.size(); }
+
+ private:
+  tab::LineReader& r_;
+  std::string line_;
+  std::vector<std::string> owned_, toks_;
+  std::size_t pos_ = 0;
+};
+
+std::vector<double> read_list(Tokens& tk, tab::LineReader& r, std::string_view key, double lo,
+                              double hi) {
+  const std::size_t n = r.count(tk.require(key), key, BsdfTable::kMaxNodes);
+  std::vector<double> v;
+  v.reserve(std::min<std::size_t>(n, 1024));
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::string t = tk.require(fmt::format("{} value {} of {}", key, i + 1, n));
+    const double x = r.number(t, key);
+    if (x < lo || x > hi)
+      r.fail(fmt::format("{} {:g} is outside [{:g}, {:g}] deg", key, x, lo, hi), key);
+    if (!v.empty() && !(x > v.back()))
+      r.fail(fmt::format("{} {:g} does not increase on {:g}", key, x, v.back()), key);
+    v.push_back(x);
+  }
+  return v;
+}
+
+struct Header {
+  std::optional<Symmetry> symmetry;
+  std::optional<bool> xyz;           // SpectralContent
+  std::optional<bool> transmission;  // ScatterType
+  std::optional<std::string> source;
+  std::optional<std::vector<double>> rotation, incidence, azimuth, radial;
+};
+
+constexpr std::string_view kKeywords =
+    "Source, Symmetry, SpectralContent, ScatterType, SampleRotation, AngleOfIncidence, "
+    "ScatterAzimuth, ScatterRadial, Monochrome, TristimulusX, TristimulusY, TristimulusZ";
+
+template <typename T>
+void set_once(std::optional<T>& slot, T value, tab::LineReader& r, std::string_view key) {
+  if (slot) r.fail(fmt::format("{} given twice", key), key);
+  slot = std::move(value);
+}
+
+// Returns the first data label ("Monochrome", "TristimulusX", ...).
+std::string read_header(tab::LineReader& r, Tokens& tk, Header& h) {
+  std::string key;
+  while (tk.next(key)) {
+    using tab::iequals;
+    if (iequals(key, "Source")) {
+      set_once(h.source, tk.require("Source"), r, "Source");
+    } else if (iequals(key, "Symmetry")) {
+      const auto v = tk.require("Symmetry");
+      Symmetry s{};
+      if (iequals(v, "PlaneSymmetrical")) s = Symmetry::plane;
+      else if (iequals(v, "Asymmetrical")) s = Symmetry::asymmetrical;
+      else if (iequals(v, "Asymmetrical4D")) s = Symmetry::asymmetrical4d;
+      else
+        r.fail(fmt::format("Symmetry '{}' is not PlaneSymmetrical, Asymmetrical or "
+                           "Asymmetrical4D", v), "Symmetry");
+      set_once(h.symmetry, s, r, "Symmetry");
+    } else if (iequals(key, "SpectralContent")) {
+      const auto v = tk.require("SpectralContent");
+      if (!iequals(v, "Monochrome") && !iequals(v, "XYZ"))
+        r.fail(fmt::format("SpectralContent '{}' is not Monochrome or XYZ", v), "SpectralContent");
+      set_once(h.xyz, iequals(v, "XYZ"), r, "SpectralContent");
+    } else if (iequals(key, "ScatterType")) {
+      const auto v = tk.require("ScatterType");
+      if (!iequals(v, "BRDF") && !iequals(v, "BTDF"))
+        r.fail(fmt::format("ScatterType '{}' is not BRDF or BTDF", v), "ScatterType");
+      set_once(h.transmission, iequals(v, "BTDF"), r, "ScatterType");
+    } else if (iequals(key, "SampleRotation")) {
+      set_once(h.rotation, read_list(tk, r, "SampleRotation", -360, 360), r, "SampleRotation");
+    } else if (iequals(key, "AngleOfIncidence")) {
+      set_once(h.incidence, read_list(tk, r, "AngleOfIncidence", 0, 90), r, "AngleOfIncidence");
+    } else if (iequals(key, "ScatterAzimuth")) {
+      set_once(h.azimuth, read_list(tk, r, "ScatterAzimuth", 0, 360), r, "ScatterAzimuth");
+    } else if (iequals(key, "ScatterRadial")) {
+      set_once(h.radial, read_list(tk, r, "ScatterRadial", 0, 180), r, "ScatterRadial");
+    } else if (iequals(key, "Monochrome") || iequals(key, "TristimulusX") ||
+               iequals(key, "TristimulusY") || iequals(key, "TristimulusZ")) {
+      if (!tk.line_done()) r.fail(fmt::format("'{}' must stand on its own line", key), key);
+      return key;
+    } else if (iequals(key, "DataBegin")) {
+      r.fail("DataBegin before the Monochrome / Tristimulus label", "DataBegin");
+    } else {
+      r.fail(fmt::format("unknown keyword '{}'; expected one of {}", key, kKeywords), key);
+    }
+  }
+  r.fail("end of file before the data section (Monochrome or TristimulusX label)");
+}
+
+void require_header(const tab::LineReader& r, const Header& h) {
+  const auto missing = [&](bool ok, std::string_view key) {
+    if (!ok) r.fail(fmt::format("the header lacks {}", key), key);
+  };
+  missing(h.symmetry.has_value(), "Symmetry");
+  missing(h.xyz.has_value(), "SpectralContent");
+  missing(h.transmission.has_value(), "ScatterType");
+  missing(h.incidence.has_value(), "AngleOfIncidence");
+  missing(h.azimuth.has_value(), "ScatterAzimuth");
+  missing(h.radial.has_value(), "ScatterRadial");
+  if (h.rotation && h.rotation->size() > 1)
+    r.unsupported(fmt::format("{} sample rotations (anisotropic data); only one is supported",
+                              h.rotation->size()),
+                  "SampleRotation");
+  if (*h.symmetry == Symmetry::plane && h.azimuth->back() > 180)
+    r.fail(fmt::format("PlaneSymmetrical data need ScatterAzimuth within [0, 180], got {:g}",
+                       h.azimuth->back()),
+           "ScatterAzimuth");
+}
+
+// One DataBegin … DataEnd block, values in file order (incidence, azimuth, radial).
+std::vector<double> read_block(tab::LineReader& r, const Header& h, std::string_view label) {
+  std::string line;
+  if (!r.next_content(line)) r.fail(fmt::format("end of file after '{}'", label), "DataBegin");
+  if (!tab::iequals(tab::LineReader::trimmed(line), "DataBegin"))
+    r.fail(fmt::format("expected DataBegin after '{}', got '{}'", label,
+                       tab::LineReader::trimmed(line)),
+           "DataBegin");
+  const std::size_t n_rot = h.rotation ? h.rotation->size() : 1;
+  const std::size_t n_aoi = h.incidence->size(), n_az = h.azimuth->size(),
+                    n_rad = h.radial->size();
+  std::vector<double> values;
+  values.reserve(std::min<std::size_t>(n_aoi * n_az * n_rad, 1 << 16));
+  for (std::size_t rot = 0; rot < n_rot; ++rot)
+    for (std::size_t i = 0; i < n_aoi; ++i) {
+      if (!r.next_content(line))
+        r.fail(fmt::format("end of file: {} block has {} of {} angles of incidence", label, i,
+                           n_aoi), "TIS");
+      const auto t = tab::tokens(line);
+      if (t.empty() || !tab::iequals(t[0], "TIS"))
+        r.fail(fmt::format("expected 'TIS <value>' for angle of incidence {:g}, got '{}'",
+                           (*h.incidence)[i], tab::LineReader::trimmed(line)), "TIS");
+      if (t.size() != 2) r.fail("TIS takes exactly one value", "TIS");
+      if (r.number(t[1], "TIS") < 0) r.fail(fmt::format("TIS {} is negative", t[1]), "TIS");
+      for (std::size_t a = 0; a < n_az; ++a) {
+        if (!r.next_content(line))
+          r.fail(fmt::format("end of file: angle of incidence {:g} has {} of {} azimuth rows",
+                             (*h.incidence)[i], a, n_az), "ScatterAzimuth");
+        const auto row = tab::tokens(line);
+        if (row.size() != n_rad)
+          r.fail(fmt::format("azimuth {:g} row has {} values, ScatterRadial declares {}",
+                             (*h.azimuth)[a], row.size(), n_rad), "ScatterRadial");
+        for (std::size_t k = 0; k < n_rad; ++k) {
+          const double v = r.number(row[k], "BSDF value");
+          if (v < 0)
+            r.fail(fmt::format("BSDF value {} at azimuth {:g}, radial {:g} is negative", row[k],
+                               (*h.azimuth)[a], (*h.radial)[k]), "BSDF value");
+          values.push_back(v);
+        }
+      }
+    }
+  if (!r.next_content(line)) r.fail(fmt::format("end of file: {} block lacks DataEnd", label), "DataEnd");
+  if (!tab::iequals(tab::LineReader::trimmed(line), "DataEnd"))
+    r.fail(fmt::format("expected DataEnd, got '{}' (more rows than the header declares?)",
+                       tab::LineReader::trimmed(line)), "DataEnd");
+  return values;
+}
+
+std::vector<double> default_radial() {
+  return {0,  0.5, 1,  1.5, 2,  3,  4,  5,  6,  8,  10,  12.5, 15,  17.5, 20,  25, 30,
+          35, 40,  45, 50,  60, 70, 80, 90, 100, 110, 120, 135, 150, 165, 180};
+}
+
+std::vector<double> range(double a, double b, double step) {
+  std::vector<double> v;
+  for (double x = a; x <= b + 1e-9; x += step) v.push_back(x);
+  return v;
+}
+
+void check_option_list(const std::vector<double>& v, std::string_view field, double lo, double hi) {
+  if (v.empty()) throw Error::invalid(std::string(field), "is empty");
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const auto f = fmt::format("{}[{}]", field, i);
+    if (!std::isfinite(v[i]) || v[i] < lo || v[i] > hi) throw Error::out_of_range(f, v[i], lo, hi, " deg");
+    if (i > 0 && !(v[i] > v[i - 1]))
+      throw Error::invalid(f, fmt::format("{:g} does not increase on {:g}", v[i], v[i - 1]));
+  }
+}
+
+// ∫ f cos θo dΩo over the hemisphere for incidence θi, midpoint rule in the mirror frame
+// (fine near the specular peak, where tables are sharp).
+double hemispherical_integral(const BsdfTable& grey, double theta_i_deg) {
+  const Vec3 wi{-std::sin(theta_i_deg * kDegToRad), 0, std::cos(theta_i_deg * kDegToRad)};
+  const auto frame = tab::MirrorFrame::of(wi);
+  static const std::vector<double> edges{0, 0.25, 0.5, 1, 2, 3, 4, 6, 8, 10, 15, 20, 25, 30, 40,
+                                         50, 60, 75, 90, 105, 120, 135, 150, 165, 180};
+  constexpr int kSub = 6, kAz = 144;
+  double sum = 0, f = 0;
+  for (std::size_t j = 0; j + 1 < edges.size(); ++j)
+    for (int s = 0; s < kSub; ++s) {
+      const double r0 = (edges[j] + (edges[j + 1] - edges[j]) * s / kSub) * kDegToRad;
+      const double r1 = (edges[j] + (edges[j + 1] - edges[j]) * (s + 1) / kSub) * kDegToRad;
+      const double c0 = std::cos(r0), c1 = std::cos(r1);
+      const double cm = std::cos(0.5 * (r0 + r1));
+      for (int m = 0; m < kAz; ++m) {
+        const double a = (m + 0.5) * 2 * kPi / kAz;
+        const Vec3 wo = frame.direction(cm, a);
+        if (!(wo.z > 0)) continue;
+        grey.eval(wi, wo, {&f, 1});
+        sum += f * wo.z * (c0 - c1) * (2 * kPi / kAz);
+      }
+    }
+  return sum;
+}
+
+}  // namespace
+
+TabulatedParts read_issa(std::istream& in, std::string_view source) {
+  tab::LineReader r(in, source);
+  Tokens tk(r);
+  Header h;
+  std::string label = read_header(r, tk, h);
+  require_header(r, h);
+  const std::size_t n_rot = h.rotation ? h.rotation->size() : 1;
+  // A size check before any data: the table must fit (values still grow only with input).
+  (void)n_rot;
+  if (h.incidence->size() * h.azimuth->size() > BsdfTable::kMaxValues / h.radial->size())
+    r.fail("the declared grid exceeds the size limit", "ScatterRadial");
+
+  const bool xyz = *h.xyz;
+  std::vector<double> grey;
+  bool seen[3] = {false, false, false};
+  for (;;) {
+    int channel = 0;
+    if (xyz) {
+      if (tab::iequals(label, "TristimulusX")) channel = 0;
+      else if (tab::iequals(label, "TristimulusY")) channel = 1;
+      else if (tab::iequals(label, "TristimulusZ")) channel = 2;
+      else r.fail(fmt::format("'{}' data in an XYZ file", label), label);
+    } else if (!tab::iequals(label, "Monochrome")) {
+      r.fail(fmt::format("'{}' data in a Monochrome file", label), label);
+    }
+    if (seen[channel]) r.fail(fmt::format("'{}' block given twice", label), label);
+    seen[channel] = true;
+    auto block = read_block(r, h, label);
+    if (channel == (xyz ? 1 : 0)) grey = std::move(block);
+    const bool done = xyz ? (seen[0] && seen[1] && seen[2]) : true;
+    std::string line;
+    if (done) {
+      if (r.next_content(line))
+        r.fail(fmt::format("unexpected content after the last DataEnd: '{}'",
+                           tab::LineReader::trimmed(line)));
+      break;
+    }
+    if (!r.next_content(line)) r.fail("end of file: XYZ data need TristimulusX, Y and Z blocks");
+    const auto t = tab::tokens(line);
+    if (t.size() != 1) r.fail(fmt::format("expected a Tristimulus label, got '{}'", line));
+    label = std::string(t[0]);
+  }
+
+  // File order is (incidence, azimuth, radial); the table wants p0 fastest, then p2, p3.
+  const std::size_t n0 = h.incidence->size(), n2 = h.radial->size(), n3 = h.azimuth->size();
+  std::vector<double> values(grey.size());
+  for (std::size_t i0 = 0; i0 < n0; ++i0)
+    for (std::size_t i3 = 0; i3 < n3; ++i3)
+      for (std::size_t i2 = 0; i2 < n2; ++i2)
+        values[(i3 * n2 + i2) * n0 + i0] = grey[(i0 * n3 + i3) * n2 + i2];
+
+  TabulatedParts parts;
+  try {
+    BsdfTable table(TableParam::specular, {*h.incidence, {}, *h.radial, *h.azimuth}, {},
+                    std::move(values), {*h.symmetry == Symmetry::plane, false});
+    (*h.transmission ? parts.btdf : parts.brdf) = std::move(table);
+  } catch (const Error& e) {
+    throw Error(Errc::parse_error, fmt::format("{}: {}", source, e.what()), e.field());
+  }
+  return parts;
+}
+
+TabulatedParts read_issa(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(Errc::not_found, fmt::format("cannot open '{}'", path), "path");
+  return read_issa(in, path);
+}
+
+void write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
+                const IssaWriteOptions& o) {
+  if (table.empty()) throw Error::invalid("table", "is empty");
+  // Spectral content: one grey table per output channel.
+  std::vector<BsdfTable> channels;
+  if (o.xyz_weights) {
+    for (int k = 0; k < 3; ++k)
+      channels.push_back(table.weighted((*o.xyz_weights)[static_cast<std::size_t>(k)]));
+  } else {
+    std::vector<double> w = o.weights;
+    if (w.empty()) w.assign(table.channels(), 1.0);
+    if (w.size() != table.channels())
+      throw Error::invalid("weights", fmt::format("has {} weights for {} channels", w.size(),
+                                                  table.channels()));
+    const double sum = std::accumulate(w.begin(), w.end(), 0.0);
+    if (!(sum > 0) || !std::isfinite(sum)) throw Error::invalid("weights", "must have a positive sum");
+    for (auto& x : w) x /= sum;
+    channels.push_back(table.weighted(w));
+  }
+
+  const bool native = table.param() == TableParam::specular && table.isotropic() &&
+                      o.incidence.empty() && o.azimuth.empty() && o.radial.empty();
+  const bool plane = table.reduction().bilateral ||
+                     (table.param() == TableParam::half_difference && table.isotropic() &&
+                      table.reduction().reciprocal);
+  std::vector<double> incidence = o.incidence, azimuth = o.azimuth, radial = o.radial;
+  if (incidence.empty()) {
+    if (table.param() == TableParam::half_difference) incidence = range(0, 80, 10);
+    else incidence = table.axis(0);
+  }
+  if (azimuth.empty())
+    azimuth = native ? table.axis(3) : plane ? range(0, 180, 5) : range(0, 355, 5);
+  if (radial.empty()) radial = native ? table.axis(2) : default_radial();
+  check_option_list(incidence, "incidence", 0, 90);
+  check_option_list(azimuth, "azimuth", 0, plane ? 180 : 360);
+  check_option_list(radial, "radial", 0, 180);
+  const auto fmt_list = [](const std::vector<double>& v) {
+    std::string s;
+    for (std::size_t i = 0; i < v.size(); ++i) s += (i ? "\t" : "") + text::format_number(v[i]);
+    return s;
+  };
+
+  std::ostringstream os;
+  if (!o.comment.empty()) {
+    std::istringstream cs(o.comment);
+    for (std::string line; std::getline(cs, line);) os << "# " << line << '\n';
+  }
+  os << "Source\tMeasured\n"
+     << "Symmetry\t" << (plane ? "PlaneSymmetrical" : "Asymmetrical") << '\n'
+     << "SpectralContent\t" << (o.xyz_weights ? "XYZ" : "Monochrome") << '\n'
+     << "ScatterType\t" << (transmission ? "BTDF" : "BRDF") << '\n'
+     << "SampleRotation\t1\n0\n"
+     << "AngleOfIncidence\t" << incidence.size() << '\n' << fmt_list(incidence) << '\n'
+     << "ScatterAzimuth\t" << azimuth.size() << '\n' << fmt_list(azimuth) << '\n'
+     << "ScatterRadial\t" << radial.size() << '\n' << fmt_list(radial) << "\n\n";
+  static constexpr const char* kLabels[3] = {"TristimulusX", "TristimulusY", "TristimulusZ"};
+  for (std::size_t k = 0; k < channels.size(); ++k) {
+    const BsdfTable& t = channels[k];
+    os << (o.xyz_weights ? kLabels[k] : "Monochrome") << "\nDataBegin\n";
+    for (std::size_t i = 0; i < incidence.size(); ++i) {
+      const double th = incidence[i] * kDegToRad;
+      const Vec3 wi{-std::sin(th), 0, std::cos(th)};
+      const auto frame = tab::MirrorFrame::of(wi);
+      os << "TIS " << fmt::format("{:.6g}", hemispherical_integral(t, incidence[i])) << '\n';
+      double f = 0;
+      for (std::size_t a = 0; a < azimuth.size(); ++a) {
+        for (std::size_t j = 0; j < radial.size(); ++j) {
+          if (native) {
+            f = t.at(i, 0, j, a, 0);
+          } else {
+            const Vec3 wo = frame.direction(std::cos(radial[j] * kDegToRad), azimuth[a] * kDegToRad);
+            f = 0;
+            if (wo.z > 0) t.eval(wi, wo, {&f, 1});
+          }
+          os << (j ? "\t" : "") << fmt::format("{}", f);
+        }
+        os << '\n';
+      }
+    }
+    os << "DataEnd\n";
+  }
+  out << os.str();
+  if (!out) throw Error(Errc::io_error, "could not write the IS-SA data");
+}
+
+void write_issa(const std::string& path, const BsdfTable& table, bool transmission,
+                const IssaWriteOptions& options) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw Error(Errc::io_error, fmt::format("cannot create '{}'", path), "path");
+  write_issa(out, table, transmission, options);
+  out.close();
+  if (!out) throw Error(Errc::io_error, fmt::format("cannot write '{}'", path), "path");
+}
+
+}  // namespace gonio::twin

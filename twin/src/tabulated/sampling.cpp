@@ -1,0 +1,243 @@
+// TableSampler — importance sampling of tabulated BSDFs (see sampling.hpp for the scheme).
+//
+// Why cells about the mirror direction rather than the table's own (θ, φ) nodes: a table
+// may be spherical, specular or half-difference, and measured tables need not be reciprocal;
+// tabulating f̄·cos itself for the receiver direction in a frame that follows the specular
+// peak gives one sampler for all of them, exact in its pdf and good for narrow lobes.
+#include "tabulated/sampling.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "tabulated/common.hpp"
+
+namespace gonio::twin::detail {
+namespace {
+
+constexpr double kCellAz = 2 * kPi / TableSampler::kAzimuthCells;
+
+// Index i such that cdf[i] <= x < cdf[i + 1], skipping empty cells.
+std::size_t find_interval(const double* cdf, std::size_t n, double x) noexcept {
+  const auto it = std::upper_bound(cdf, cdf + n + 1, x);
+  std::size_t i = static_cast<std::size_t>(it - cdf);
+  i = i == 0 ? 0 : i - 1;
+  i = std::min(i, n - 1);
+  while (i > 0 && cdf[i + 1] <= cdf[i]) --i;      // x at the top: last non-empty cell
+  while (i + 1 < n && cdf[i + 1] <= cdf[i]) ++i;  // empty cell at the bottom
+  return i;
+}
+
+Vec3 cosine_hemisphere(Vec2 u) noexcept {
+  const double r = std::sqrt(u.x), phi = 2 * kPi * u.y;
+  return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1 - u.x))};
+}
+
+}  // namespace
+
+const std::vector<double>& TableSampler::radial_edges_deg() {
+  static const std::vector<double> edges{0,  0.25, 0.5, 0.75, 1,  1.5, 2,  2.5, 3,   4,   5,
+                                         6,  8,    10,  12.5, 15, 20,  25, 30,  35,  40,  50,
+                                         60, 70,   80,  90,   105, 120, 135, 150, 165, 180};
+  return edges;
+}
+
+TableSampler::TableSampler(const Density& f, bool reflection, bool transmission, bool anisotropic)
+    : reflection_(reflection), transmission_(transmission), anisotropic_(anisotropic) {
+  const auto& edges = radial_edges_deg();
+  const std::size_t rows = edges.size() - 1;
+  constexpr std::size_t cols = kAzimuthCells;
+  theta_nodes_ = static_cast<std::size_t>(std::lround(90.0 / kThetaStepDeg)) + 1;
+  phi_nodes_ = anisotropic_ ? static_cast<std::size_t>(std::lround(360.0 / kPhiStepDeg)) : 1;
+  for (const double e : edges) cos_edges_.push_back(std::cos(e * kDegToRad));
+  cos_edges_.front() = 1;
+  cos_edges_.back() = -1;
+  for (std::size_t j = 0; j < rows; ++j)
+    cell_solid_angle_.push_back((cos_edges_[j] - cos_edges_[j + 1]) * kCellAz);
+
+  // Evaluation points of one node: corners (rows + 1) × cols (periodic in a) and centres.
+  std::vector<double> corner_r(rows + 1), centre_r(rows);
+  for (std::size_t j = 0; j <= rows; ++j) corner_r[j] = cos_edges_[j];
+  for (std::size_t j = 0; j < rows; ++j)
+    centre_r[j] = std::cos(0.5 * (edges[j] + edges[j + 1]) * kDegToRad);
+
+  grids_.resize(theta_nodes_ * phi_nodes_ * 2);
+  std::vector<double> corner_val[2], centre_val[2];
+  for (int s = 0; s < 2; ++s) {
+    corner_val[s].assign((rows + 1) * cols, 0.0);
+    centre_val[s].assign(rows * cols, 0.0);
+  }
+  // f̄·cos at a frame direction d (d.z > 0): wi = d for reflection, its mirror image for
+  // transmission; both share the cosine d.z.
+  const auto point = [&](const Vec3& d, const Vec3& wo, double& refl, double& trans) {
+    refl = trans = 0;
+    if (!(d.z > 0)) return;
+    if (reflection_) refl = std::max(0.0, f(d, wo)) * d.z;
+    if (transmission_) trans = std::max(0.0, f(tab::flip_z(d), wo)) * d.z;
+  };
+
+  for (std::size_t l = 0; l < phi_nodes_; ++l) {
+    for (std::size_t k = 0; k < theta_nodes_; ++k) {
+      const double theta = std::min(static_cast<double>(k) * kThetaStepDeg, 89.5) * kDegToRad;
+      const double phi = static_cast<double>(l) * kPhiStepDeg * kDegToRad;
+      const Vec3 wo = spherical(theta, phi);
+      const auto frame = tab::MirrorFrame::of(wo);
+      for (std::size_t j = 0; j <= rows; ++j)
+        for (std::size_t m = 0; m < cols; ++m)
+          point(frame.direction(corner_r[j], static_cast<double>(m) * kCellAz), wo,
+                corner_val[0][j * cols + m], corner_val[1][j * cols + m]);
+      for (std::size_t j = 0; j < rows; ++j)
+        for (std::size_t m = 0; m < cols; ++m)
+          point(frame.direction(centre_r[j], (static_cast<double>(m) + 0.5) * kCellAz), wo,
+                centre_val[0][j * cols + m], centre_val[1][j * cols + m]);
+
+      for (int s = 0; s < 2; ++s) {
+        Grid& g = grids_[(l * theta_nodes_ + k) * 2 + static_cast<std::size_t>(s)];
+        g.value.assign(rows * cols, 0.0);
+        g.row_cdf.assign(rows + 1, 0.0);
+        g.col_cdf.assign(rows * (cols + 1), 0.0);
+        const auto& cv = corner_val[s];
+        for (std::size_t j = 0; j < rows; ++j) {
+          double row = 0;
+          for (std::size_t m = 0; m < cols; ++m) {
+            const std::size_t m1 = (m + 1) % cols;
+            const double v = std::max({cv[j * cols + m], cv[j * cols + m1], cv[(j + 1) * cols + m],
+                                       cv[(j + 1) * cols + m1], centre_val[s][j * cols + m]});
+            g.value[j * cols + m] = v;
+            row += v;
+            g.col_cdf[j * (cols + 1) + m + 1] = row;
+          }
+          double* cc = &g.col_cdf[j * (cols + 1)];
+          for (std::size_t m = 1; m <= cols; ++m)
+            cc[m] = row > 0 ? cc[m] / row : static_cast<double>(m) / static_cast<double>(cols);
+          cc[cols] = 1;
+          g.row_cdf[j + 1] = g.row_cdf[j] + row * cell_solid_angle_[j];
+        }
+        g.integral = g.row_cdf[rows];
+        for (auto& c : g.row_cdf) c = g.integral > 0 ? c / g.integral : 0;
+        if (g.integral > 0) g.row_cdf[rows] = 1;
+      }
+    }
+  }
+}
+
+const TableSampler::Grid& TableSampler::grid(std::size_t theta_node, std::size_t phi_node,
+                                             bool transmission) const {
+  return grids_[(phi_node * theta_nodes_ + theta_node) * 2 + (transmission ? 1 : 0)];
+}
+
+std::size_t TableSampler::components(const Vec3& wo, Component out[8]) const {
+  const double theta = tab::polar_deg(wo) / kThetaStepDeg;
+  const std::size_t k = std::min(static_cast<std::size_t>(std::max(0.0, std::floor(theta))),
+                                 theta_nodes_ - 2);
+  const double t = std::clamp(theta - static_cast<double>(k), 0.0, 1.0);
+  std::array<std::pair<std::size_t, double>, 2> th{{{k, 1 - t}, {k + 1, t}}};
+  std::array<std::pair<std::size_t, double>, 2> ph{{{0, 1.0}, {0, 0.0}}};
+  if (anisotropic_) {
+    const double phi = tab::azimuth_deg(wo) / kPhiStepDeg;
+    const std::size_t l = static_cast<std::size_t>(std::floor(phi)) % phi_nodes_;
+    const double s = std::clamp(phi - std::floor(phi), 0.0, 1.0);
+    ph = {{{l, 1 - s}, {(l + 1) % phi_nodes_, s}}};
+  }
+  std::size_t n = 0;
+  for (const auto& [pk, pw] : ph)
+    for (const auto& [tk, tw] : th) {
+      const double w = pw * tw;
+      if (w <= 0) continue;
+      for (int side = 0; side < 2; ++side) {
+        if ((side == 0 && !reflection_) || (side == 1 && !transmission_)) continue;
+        const Grid& g = grid(tk, pk, side == 1);
+        if (g.integral > 0) out[n++] = {&g, side == 1, w * g.integral};
+      }
+    }
+  return n;
+}
+
+double TableSampler::grid_density(const Grid& g, double r_deg, double a_rad) const {
+  const auto& edges = radial_edges_deg();
+  const std::size_t rows = edges.size() - 1;
+  const auto it = std::upper_bound(edges.begin(), edges.end(), r_deg);
+  std::size_t j = static_cast<std::size_t>(it - edges.begin());
+  j = std::min(j == 0 ? 0 : j - 1, rows - 1);
+  const auto m = std::min(static_cast<std::size_t>(std::max(0.0, a_rad / kCellAz)),
+                          static_cast<std::size_t>(kAzimuthCells) - 1);
+  return g.value[j * kAzimuthCells + m] / g.integral;
+}
+
+double TableSampler::defensive_pdf(const Vec3& wi) const {
+  const double hemispheres = (reflection_ ? 1.0 : 0.0) + (transmission_ ? 1.0 : 0.0);
+  if (hemispheres == 0) return 0;
+  if ((wi.z > 0 && reflection_) || (wi.z < 0 && transmission_))
+    return std::abs(wi.z) * kInvPi / hemispheres;
+  return 0;
+}
+
+double TableSampler::pdf(const Vec3& wo_in, const Vec3& wi_in) const {
+  Vec3 wo = wo_in, wi = wi_in;
+  if (wo.z < 0) {
+    wo = tab::flip_z(wo);
+    wi = tab::flip_z(wi);
+  }
+  Component comps[8];
+  const std::size_t n = components(wo, comps);
+  double total = 0;
+  for (std::size_t c = 0; c < n; ++c) total += comps[c].weight;
+  const double def = defensive_pdf(wi);
+  if (!(total > 0)) return def;
+  const auto frame = tab::MirrorFrame::of(wo);
+  double r[2] = {0, 0}, a[2] = {0, 0};
+  bool have[2] = {false, false};
+  double mix = 0;
+  for (std::size_t c = 0; c < n; ++c) {
+    const int side = comps[c].transmission ? 1 : 0;
+    if (!have[side]) {
+      frame.angles(side ? tab::flip_z(wi) : wi, r[side], a[side]);
+      have[side] = true;
+    }
+    mix += comps[c].weight * grid_density(*comps[c].grid, r[side], a[side]);
+  }
+  return kDefensive * def + (1 - kDefensive) * mix / total;
+}
+
+std::optional<BsdfSample> TableSampler::sample(const Vec3& wo_in, double u_lobe, Vec2 u) const {
+  Vec3 wo = wo_in;
+  const bool flip = wo.z < 0;
+  if (flip) wo = tab::flip_z(wo);
+  Component comps[8];
+  const std::size_t n = components(wo, comps);
+  double total = 0;
+  for (std::size_t c = 0; c < n; ++c) total += comps[c].weight;
+
+  Vec3 wi;
+  if (total > 0 && u_lobe >= kDefensive) {
+    double x = (u_lobe - kDefensive) / (1 - kDefensive) * total;
+    std::size_t c = 0;
+    while (c + 1 < n && x >= comps[c].weight) x -= comps[c++].weight;
+    const Grid& g = *comps[c].grid;
+    const std::size_t rows = cos_edges_.size() - 1;
+    const std::size_t j = find_interval(g.row_cdf.data(), rows, u.x);
+    const double pr = g.row_cdf[j + 1] - g.row_cdf[j];
+    const double ur = pr > 0 ? std::clamp((u.x - g.row_cdf[j]) / pr, 0.0, 1.0) : 0.5;
+    const double cos_r = cos_edges_[j] - ur * (cos_edges_[j] - cos_edges_[j + 1]);
+    const double* cc = &g.col_cdf[j * (kAzimuthCells + 1)];
+    const std::size_t m = find_interval(cc, kAzimuthCells, u.y);
+    const double pa = cc[m + 1] - cc[m];
+    const double ua = pa > 0 ? std::clamp((u.y - cc[m]) / pa, 0.0, 1.0) : 0.5;
+    const double a = (static_cast<double>(m) + ua) * kCellAz;
+    const Vec3 d = tab::MirrorFrame::of(wo).direction(cos_r, a);
+    wi = comps[c].transmission ? tab::flip_z(d) : d;
+  } else {
+    const double v = total > 0 ? u_lobe / kDefensive : u_lobe;
+    bool below = transmission_;
+    if (reflection_ && transmission_) below = v >= 0.5;
+    const Vec3 d = cosine_hemisphere(u);
+    wi = below ? tab::flip_z(d) : d;
+  }
+  wi = normalize(wi);
+  if (flip) wi = tab::flip_z(wi);
+  const double p = pdf(wo_in, wi);
+  if (!(p > 0) || !std::isfinite(p)) return std::nullopt;
+  return BsdfSample{wi, p};
+}
+
+}  // namespace gonio::twin::detail
