@@ -10,11 +10,12 @@
 // Exit codes:
 //   0  success
 //   1  unexpected internal failure
-//   2  usage: malformed option or value out of range (nothing was sent)
+//   2  usage: malformed option, value out of range or unknown preset (nothing was sent)
 //   3  device absent or unreachable (no such port, connection refused, link dropped)
 //   4  timeout: the device did not answer, or the motion did not finish in time
 //   5  protocol error: the device answered nonsense or refused the request
-//   6  device alarm (the alarm code is printed), or following error
+//   6  device alarm (the alarm code is printed; also `status` when an alarm is present),
+//      or following error
 //   7  device busy (not ready to accept a command)
 #pragma once
 
