@@ -1,0 +1,837 @@
+// Line plots through Cairo, and PNG image I/O.
+//
+// One drawing routine serves every format: Cairo's image surface (written as PNG), its SVG
+// surface and its PDF surface. Layout is computed from text extents so that tick labels,
+// axis labels and the legend never overlap; the legend goes to the inside corner that
+// covers the fewest data points (none, ideally), otherwise outside on the right.
+// Tick positions use Heckbert's "nice numbers" (Graphics Gems, 1990): steps of 1, 2 or 5
+// times a power of ten; logarithmic axes tick at decades (with 2 and 5 when they span
+// little) and label them 10ⁿ with a raised exponent.
+#include "gonio/twin/plot.hpp"
+
+#include <cairo-pdf.h>
+#include <cairo-svg.h>
+#include <cairo.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numbers>
+
+#include <fmt/format.h>
+
+#include "gonio/proto/error.hpp"
+
+namespace gonio::twin {
+namespace {
+
+using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
+using ContextPtr = std::unique_ptr<cairo_t, decltype(&cairo_destroy)>;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct Rect {
+  double x = 0, y = 0, w = 0, h = 0;
+  double right() const { return x + w; }
+  double bottom() const { return y + h; }
+  bool contains(double px, double py) const {
+    return px >= x && px <= right() && py >= y && py <= bottom();
+  }
+};
+
+// ---- text ------------------------------------------------------------------------------
+
+void font(cairo_t* cr, double size, bool bold = false) {
+  cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL,
+                         bold ? CAIRO_FONT_WEIGHT_BOLD : CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, size);
+}
+
+double text_width(cairo_t* cr, const std::string& s) {
+  cairo_text_extents_t e;
+  cairo_text_extents(cr, s.c_str(), &e);
+  return e.x_advance;
+}
+
+// Draws `s` with its anchor at (x, y): ha = 0 left, 0.5 centre, 1 right; the vertical
+// anchor is the middle of the font's cap height, so rows of labels line up.
+void text(cairo_t* cr, const std::string& s, double x, double y, double ha) {
+  cairo_font_extents_t fe;
+  cairo_font_extents(cr, &fe);
+  cairo_move_to(cr, x - ha * text_width(cr, s), y + 0.35 * fe.ascent);
+  cairo_show_text(cr, s.c_str());
+}
+
+// A tick label: base text with an optional raised exponent ("10" + "-3").
+struct Label {
+  std::string base, sup;
+};
+
+double label_width(cairo_t* cr, const Label& l, double size) {
+  font(cr, size);
+  double w = text_width(cr, l.base);
+  if (!l.sup.empty()) {
+    font(cr, size * 0.72);
+    w += text_width(cr, l.sup);
+    font(cr, size);
+  }
+  return w;
+}
+
+void draw_label(cairo_t* cr, const Label& l, double x, double y, double ha, double size) {
+  const double w = label_width(cr, l, size);
+  const double x0 = x - ha * w;
+  font(cr, size);
+  text(cr, l.base, x0, y, 0);
+  if (!l.sup.empty()) {
+    const double bw = text_width(cr, l.base);
+    font(cr, size * 0.72);
+    text(cr, l.sup, x0 + bw, y - 0.45 * size, 0);
+    font(cr, size);
+  }
+}
+
+std::string axis_title(const Axis& a) {
+  return a.unit.empty() ? a.label : fmt::format("{} ({})", a.label, a.unit);
+}
+
+// ---- scales and ticks ----------------------------------------------------------------
+
+struct Scale {
+  double lo = 0, hi = 1;  // data range
+  bool log = false;
+  double p0 = 0, p1 = 1;  // device coordinates of lo and hi
+  double t(double v) const { return log ? std::log10(v) : v; }
+  double map(double v) const { return p0 + (t(v) - t(lo)) / (t(hi) - t(lo)) * (p1 - p0); }
+  bool valid(double v) const { return std::isfinite(v) && (!log || v > 0); }
+};
+
+struct Tick {
+  double v;
+  Label label;
+  bool major;
+};
+
+// Heckbert's nice number: 1, 2, 5 or 10 times a power of ten, close to x.
+double nice_step(double x) {
+  const double e = std::floor(std::log10(x));
+  const double f = x / std::pow(10.0, e);
+  const double nf = f < 1.5 ? 1 : f < 3 ? 2 : f < 7 ? 5 : 10;
+  return nf * std::pow(10.0, e);
+}
+
+std::string format_tick(double v, double step) {
+  const int decimals = std::max(0, -static_cast<int>(std::floor(std::log10(step) + 1e-9)));
+  if (std::abs(v) < step * 1e-9) v = 0;  // no "-0"
+  return fmt::format("{:.{}f}", v, decimals);
+}
+
+std::vector<Tick> ticks(const Scale& s, double length_px) {
+  std::vector<Tick> out;
+  if (!s.log) {
+    const int target = std::clamp(static_cast<int>(length_px / 70), 3, 10);
+    const double step = nice_step((s.hi - s.lo) / target);
+    for (double k = std::ceil(s.lo / step - 1e-9); k * step <= s.hi + step * 1e-9; k += 1) {
+      const double v = k * step;
+      out.push_back({v, {format_tick(v, step), ""}, true});
+    }
+    return out;
+  }
+  const double d0 = std::floor(std::log10(s.lo)), d1 = std::ceil(std::log10(s.hi));
+  const double decades = std::log10(s.hi / s.lo);
+  const int every = std::max(1, static_cast<int>(std::ceil((d1 - d0) / std::max(2.0, length_px / 45))));
+  for (double d = d0; d <= d1; d += 1) {
+    for (int m = 1; m <= 9; ++m) {
+      const double v = m * std::pow(10.0, d);
+      if (v < s.lo * (1 - 1e-9) || v > s.hi * (1 + 1e-9)) continue;
+      if (decades < 1.5) {  // few decades: plain numbers at 1, 2, 5
+        const bool labelled = m == 1 || m == 2 || m == 5;
+        const double step = std::pow(10.0, d);
+        out.push_back({v, {labelled ? format_tick(v, step) : "", ""}, labelled});
+      } else if (m == 1) {
+        const bool labelled = static_cast<long long>(d - d0) % every == 0;
+        out.push_back({v, {labelled ? "10" : "", labelled ? fmt::format("{:g}", d) : ""}, true});
+      } else if (decades <= 6) {
+        out.push_back({v, {}, false});  // unlabelled minor tick
+      }
+    }
+  }
+  return out;
+}
+
+// Data range of an axis: finite values (positive ones on a log axis), padded.
+std::pair<double, double> auto_range(const Axis& axis, const std::vector<Series>& series,
+                                     bool is_y) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  const auto take = [&](double v) {
+    if (!std::isfinite(v) || (axis.log && v <= 0)) return;
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  };
+  for (const auto& s : series) {
+    const auto& v = is_y ? s.y : s.x;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
+      take(v[i]);
+      if (is_y && !s.sigma.empty()) {
+        take(v[i] + s.sigma[i]);
+        if (!axis.log || v[i] - s.sigma[i] > v[i] * 0.1) take(v[i] - s.sigma[i]);
+      }
+    }
+  }
+  if (!(lo <= hi)) return axis.log ? std::pair{1.0, 10.0} : std::pair{0.0, 1.0};
+  if (axis.log) {
+    double l = std::log10(lo), h = std::log10(hi);
+    if (h - l < 1e-9) {
+      l -= 0.5;
+      h += 0.5;
+    }
+    const double pad = 0.04 * (h - l);
+    return {std::pow(10.0, l - pad), std::pow(10.0, h + pad)};
+  }
+  if (hi - lo < 1e-12 * std::max(1.0, std::abs(hi))) {
+    const double d = std::max(1.0, std::abs(hi) * 0.1);
+    return {lo - d, hi + d};
+  }
+  const double pad = 0.04 * (hi - lo);
+  return {lo - pad, hi + pad};
+}
+
+Scale make_scale(const Axis& axis, const std::vector<Series>& series, bool is_y) {
+  auto [lo, hi] = auto_range(axis, series, is_y);
+  if (axis.min) lo = *axis.min;
+  if (axis.max) hi = *axis.max;
+  if (!(hi > lo)) {  // one bound given and the data beyond it
+    if (axis.log) {
+      if (axis.min) hi = lo * 10;
+      else lo = hi / 10;
+    } else {
+      if (axis.min) hi = lo + 1;
+      else lo = hi - 1;
+    }
+  }
+  Scale s;
+  s.lo = lo;
+  s.hi = hi;
+  s.log = axis.log;
+  return s;
+}
+
+// ---- drawing primitives -----------------------------------------------------------------
+
+void set_color(cairo_t* cr, const Rgba& c) { cairo_set_source_rgba(cr, c.r, c.g, c.b, c.a); }
+
+void set_line_style(cairo_t* cr, LineStyle style, double width) {
+  cairo_set_line_width(cr, width);
+  cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
+  if (style == LineStyle::dashed) {
+    const double d[] = {4 * width, 2.5 * width};
+    cairo_set_dash(cr, d, 2, 0);
+    cairo_set_line_cap(cr, CAIRO_LINE_CAP_BUTT);
+  } else if (style == LineStyle::dotted) {
+    const double d[] = {0, 2.2 * width};
+    cairo_set_dash(cr, d, 2, 0);
+    cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
+  } else {
+    cairo_set_dash(cr, nullptr, 0, 0);
+    cairo_set_line_cap(cr, CAIRO_LINE_CAP_BUTT);
+  }
+}
+
+void draw_marker(cairo_t* cr, Marker m, bool filled, double x, double y, double size,
+                 double line_width) {
+  const double r = 0.5 * size;
+  cairo_new_path(cr);
+  switch (m) {
+    case Marker::none:
+      return;
+    case Marker::circle:
+      cairo_arc(cr, x, y, r, 0, 2 * std::numbers::pi);
+      break;
+    case Marker::square:
+      cairo_rectangle(cr, x - 0.85 * r, y - 0.85 * r, 1.7 * r, 1.7 * r);
+      break;
+    case Marker::triangle:
+      cairo_move_to(cr, x, y - 1.1 * r);
+      cairo_line_to(cr, x + r, y + 0.7 * r);
+      cairo_line_to(cr, x - r, y + 0.7 * r);
+      cairo_close_path(cr);
+      break;
+    case Marker::diamond:
+      cairo_move_to(cr, x, y - 1.15 * r);
+      cairo_line_to(cr, x + 0.9 * r, y);
+      cairo_line_to(cr, x, y + 1.15 * r);
+      cairo_line_to(cr, x - 0.9 * r, y);
+      cairo_close_path(cr);
+      break;
+    case Marker::cross:
+      cairo_move_to(cr, x - 0.8 * r, y - 0.8 * r);
+      cairo_line_to(cr, x + 0.8 * r, y + 0.8 * r);
+      cairo_move_to(cr, x + 0.8 * r, y - 0.8 * r);
+      cairo_line_to(cr, x - 0.8 * r, y + 0.8 * r);
+      filled = false;
+      break;
+    case Marker::plus:
+      cairo_move_to(cr, x - r, y);
+      cairo_line_to(cr, x + r, y);
+      cairo_move_to(cr, x, y - r);
+      cairo_line_to(cr, x, y + r);
+      filled = false;
+      break;
+  }
+  cairo_set_dash(cr, nullptr, 0, 0);
+  cairo_set_line_width(cr, std::max(1.0, 0.8 * line_width));
+  if (filled) {
+    cairo_fill(cr);
+  } else if (m == Marker::cross || m == Marker::plus) {
+    cairo_stroke(cr);
+  } else {  // open marker: white inside so lines underneath do not show through
+    cairo_save(cr);
+    cairo_set_source_rgb(cr, 1, 1, 1);
+    cairo_fill_preserve(cr);
+    cairo_restore(cr);
+    cairo_stroke(cr);
+  }
+}
+
+Rgba series_color(const Series& s, std::size_t index) {
+  return s.color ? *s.color : palette_color(index);
+}
+
+// ---- legend --------------------------------------------------------------------------
+
+struct LegendBox {
+  Rect rect;
+  std::vector<std::size_t> entries;  // indices of labelled series
+  double row = 0, sample = 0;
+};
+
+LegendBox legend_size(cairo_t* cr, const Panel& p, double size) {
+  LegendBox box;
+  font(cr, size);
+  double w = 0;
+  for (std::size_t i = 0; i < p.series.size(); ++i) {
+    if (p.series[i].label.empty()) continue;
+    box.entries.push_back(i);
+    w = std::max(w, text_width(cr, p.series[i].label));
+  }
+  box.row = 1.55 * size;
+  box.sample = 2.6 * size;
+  box.rect.w = 0.7 * size + box.sample + 0.6 * size + w + 0.8 * size;
+  box.rect.h = box.row * static_cast<double>(box.entries.size()) + 0.6 * size;
+  return box;
+}
+
+// How many data points, error-bar ends and line samples fall inside `r` (device units).
+int covered(const Rect& r, const Panel& p, const Scale& sx, const Scale& sy) {
+  int n = 0;
+  const Rect grown{r.x - 4, r.y - 4, r.w + 8, r.h + 8};
+  for (const auto& s : p.series) {
+    double px = kNaN, py = kNaN;
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+      if (!sx.valid(s.x[i]) || !sy.valid(s.y[i])) {
+        px = kNaN;
+        continue;
+      }
+      const double x = sx.map(s.x[i]), y = sy.map(s.y[i]);
+      if (grown.contains(x, y)) ++n;
+      if (!s.sigma.empty() && s.sigma[i] > 0) {
+        for (double v : {s.y[i] - s.sigma[i], s.y[i] + s.sigma[i]})
+          if (sy.valid(v) && grown.contains(x, sy.map(v))) ++n;
+      }
+      if (s.line != LineStyle::none && std::isfinite(px)) {  // sample the segment
+        const double len = std::hypot(x - px, y - py);
+        const int steps = std::min(2000, static_cast<int>(len / 3));
+        for (int k = 1; k < steps; ++k) {
+          const double t = static_cast<double>(k) / steps;
+          if (grown.contains(px + t * (x - px), py + t * (y - py))) ++n;
+        }
+      }
+      px = x;
+      py = y;
+    }
+  }
+  return n;
+}
+
+void draw_legend(cairo_t* cr, const LegendBox& box, const Panel& p, double size) {
+  const Rect& r = box.rect;
+  cairo_set_dash(cr, nullptr, 0, 0);
+  cairo_rectangle(cr, r.x, r.y, r.w, r.h);
+  cairo_set_source_rgba(cr, 1, 1, 1, 0.92);
+  cairo_fill_preserve(cr);
+  cairo_set_source_rgb(cr, 0.6, 0.6, 0.6);
+  cairo_set_line_width(cr, 0.8);
+  cairo_stroke(cr);
+  font(cr, size);
+  double y = r.y + 0.3 * size + 0.5 * box.row;
+  for (std::size_t i : box.entries) {
+    const Series& s = p.series[i];
+    const Rgba c = series_color(s, i);
+    const double x0 = r.x + 0.7 * size;
+    set_color(cr, c);
+    if (s.line != LineStyle::none) {
+      set_line_style(cr, s.line, s.line_width);
+      cairo_move_to(cr, x0, y);
+      cairo_line_to(cr, x0 + box.sample, y);
+      cairo_stroke(cr);
+    }
+    if (!s.sigma.empty()) {  // a small error bar says "± σ"
+      set_line_style(cr, LineStyle::solid, 1);
+      const double xm = x0 + 0.5 * box.sample, h = 0.42 * box.row;
+      cairo_move_to(cr, xm, y - h);
+      cairo_line_to(cr, xm, y + h);
+      cairo_move_to(cr, xm - 3, y - h);
+      cairo_line_to(cr, xm + 3, y - h);
+      cairo_move_to(cr, xm - 3, y + h);
+      cairo_line_to(cr, xm + 3, y + h);
+      cairo_stroke(cr);
+    }
+    draw_marker(cr, s.marker, s.marker_filled, x0 + 0.5 * box.sample, y,
+                std::min(s.marker_size, box.row * 0.8), s.line_width);
+    cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
+    text(cr, s.label, x0 + box.sample + 0.6 * size, y, 0);
+    y += box.row;
+  }
+}
+
+// ---- series ----------------------------------------------------------------------------
+
+void draw_series(cairo_t* cr, const Series& s, std::size_t index, const Scale& sx,
+                 const Scale& sy) {
+  const Rgba c = series_color(s, index);
+  set_color(cr, c);
+  if (!s.sigma.empty()) {
+    set_line_style(cr, LineStyle::solid, std::max(0.8, 0.6 * s.line_width));
+    const double cap = std::max(2.0, 0.45 * s.marker_size);
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+      if (!sx.valid(s.x[i]) || !sy.valid(s.y[i]) || !(s.sigma[i] > 0)) continue;
+      const double x = sx.map(s.x[i]);
+      const double lo = s.y[i] - s.sigma[i];
+      // On a log axis a bar reaching zero runs off the bottom of the plot (clipped).
+      const double y0 = sy.valid(lo) ? sy.map(lo) : sy.p0 + 10;
+      const double y1 = sy.map(s.y[i] + s.sigma[i]);
+      cairo_move_to(cr, x, y0);
+      cairo_line_to(cr, x, y1);
+      cairo_move_to(cr, x - cap, y0);
+      cairo_line_to(cr, x + cap, y0);
+      cairo_move_to(cr, x - cap, y1);
+      cairo_line_to(cr, x + cap, y1);
+    }
+    cairo_stroke(cr);
+  }
+  if (s.line != LineStyle::none) {
+    set_line_style(cr, s.line, s.line_width);
+    bool pen = false;
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+      if (!sx.valid(s.x[i]) || !sy.valid(s.y[i])) {
+        pen = false;
+        continue;
+      }
+      const double x = sx.map(s.x[i]), y = sy.map(s.y[i]);
+      if (pen) cairo_line_to(cr, x, y);
+      else cairo_move_to(cr, x, y);
+      pen = true;
+    }
+    cairo_stroke(cr);
+  }
+  if (s.marker != Marker::none) {
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+      if (!sx.valid(s.x[i]) || !sy.valid(s.y[i])) continue;
+      draw_marker(cr, s.marker, s.marker_filled, sx.map(s.x[i]), sy.map(s.y[i]), s.marker_size,
+                  s.line_width);
+    }
+  }
+}
+
+// ---- figure ----------------------------------------------------------------------------
+
+struct Fonts {
+  double base, title, label, tick, legend;
+};
+
+Fonts fonts_for(const Figure& f) {
+  const double base = std::clamp(std::min(f.width, f.height) / 45, 10.0, 18.0);
+  return {base, base * 1.3, base * 1.05, base * 0.9, base * 0.9};
+}
+
+void draw_figure(cairo_t* cr, const Figure& f) {
+  const Fonts fs = fonts_for(f);
+  cairo_set_source_rgb(cr, 1, 1, 1);
+  cairo_paint(cr);
+
+  double top = 0.8 * fs.base;
+  if (!f.title.empty()) {
+    font(cr, fs.title, true);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    text(cr, f.title, 0.5 * f.width, 1.3 * fs.title, 0.5);
+    top = 2.4 * fs.title;
+  }
+
+  // Scales and tick labels first: the left margin is shared so that x axes line up.
+  struct Layout {
+    Scale sx, sy;
+    std::vector<Tick> tx, ty;
+    Rect area, plot;
+    LegendBox legend;
+  };
+  std::vector<Layout> layouts(f.panels.size());
+  double total_ratio = 0;
+  for (const auto& p : f.panels) total_ratio += p.height_ratio;
+  const double available = f.height - top;
+  double y = top;
+  double left = 0;
+  for (std::size_t k = 0; k < f.panels.size(); ++k) {
+    const Panel& p = f.panels[k];
+    Layout& l = layouts[k];
+    l.area = {0, y, f.width, available * p.height_ratio / total_ratio};
+    y += l.area.h;
+    l.sx = make_scale(p.x, p.series, false);
+    l.sy = make_scale(p.y, p.series, true);
+    l.ty = ticks(l.sy, l.area.h * 0.7);
+    double wmax = 0;
+    for (const auto& t : l.ty) wmax = std::max(wmax, label_width(cr, t.label, fs.tick));
+    const double label_band = p.y.label.empty() && p.y.unit.empty() ? 0 : 1.9 * fs.label;
+    left = std::max(left, 0.8 * fs.base + label_band + wmax + 0.7 * fs.tick);
+  }
+  for (std::size_t k = 0; k < f.panels.size(); ++k) {
+    const Panel& p = f.panels[k];
+    Layout& l = layouts[k];
+    const double head = p.title.empty() ? 0.9 * fs.base : 2.0 * fs.label;
+    const double foot = 1.6 * fs.tick + (p.x.label.empty() && p.x.unit.empty() ? 0.4 * fs.base
+                                                                             : 2.0 * fs.label);
+    l.plot = {left, l.area.y + head, f.width - left - 1.6 * fs.base, l.area.h - head - foot};
+    l.legend = legend_size(cr, p, fs.legend);
+    const auto map_axes = [&] {
+      l.sx.p0 = l.plot.x;
+      l.sx.p1 = l.plot.right();
+      l.sy.p0 = l.plot.bottom();
+      l.sy.p1 = l.plot.y;
+    };
+    map_axes();
+    LegendPlacement where = p.legend;
+    if (l.legend.entries.empty()) where = LegendPlacement::none;
+    const double inset = 0.6 * fs.base;
+    const auto corner = [&](LegendPlacement c) {
+      Rect r = l.legend.rect;
+      const bool right = c == LegendPlacement::upper_right || c == LegendPlacement::lower_right;
+      const bool upper = c == LegendPlacement::upper_right || c == LegendPlacement::upper_left;
+      r.x = right ? l.plot.right() - inset - r.w : l.plot.x + inset;
+      r.y = upper ? l.plot.y + inset : l.plot.bottom() - inset - r.h;
+      return r;
+    };
+    if (where == LegendPlacement::automatic) {
+      where = LegendPlacement::outside_right;
+      int best = std::numeric_limits<int>::max();
+      for (auto c : {LegendPlacement::upper_right, LegendPlacement::upper_left,
+                     LegendPlacement::lower_right, LegendPlacement::lower_left}) {
+        const Rect r = corner(c);
+        if (r.w > l.plot.w * 0.6 || r.h > l.plot.h * 0.8) continue;
+        const int n = covered(r, p, l.sx, l.sy);
+        if (n < best) {
+          best = n;
+          where = c;
+        }
+      }
+      if (best > 0) where = LegendPlacement::outside_right;
+    }
+    if (where == LegendPlacement::outside_right) {
+      l.plot.w -= l.legend.rect.w + inset;
+      map_axes();
+      l.legend.rect.x = l.plot.right() + inset;
+      l.legend.rect.y = l.plot.y;
+    } else if (where != LegendPlacement::none) {
+      l.legend.rect = corner(where);
+    } else {
+      l.legend.entries.clear();
+    }
+    l.tx = ticks(l.sx, l.plot.w);
+  }
+
+  for (std::size_t k = 0; k < f.panels.size(); ++k) {
+    const Panel& p = f.panels[k];
+    const Layout& l = layouts[k];
+    const Rect& r = l.plot;
+    cairo_set_dash(cr, nullptr, 0, 0);
+
+    // grid at major ticks, then reference lines
+    cairo_set_line_width(cr, 0.6);
+    cairo_set_source_rgb(cr, 0.88, 0.88, 0.88);
+    for (const auto& t : l.tx) {
+      if (!t.major) continue;
+      const double x = std::round(l.sx.map(t.v)) + 0.5;
+      cairo_move_to(cr, x, r.y);
+      cairo_line_to(cr, x, r.bottom());
+    }
+    for (const auto& t : l.ty) {
+      if (!t.major) continue;
+      const double yy = std::round(l.sy.map(t.v)) + 0.5;
+      cairo_move_to(cr, r.x, yy);
+      cairo_line_to(cr, r.right(), yy);
+    }
+    cairo_stroke(cr);
+    cairo_set_source_rgb(cr, 0.45, 0.45, 0.45);
+    cairo_set_line_width(cr, 1.0);
+    for (double v : p.y_reference_lines) {
+      if (!l.sy.valid(v) || v < std::min(l.sy.lo, l.sy.hi) || v > std::max(l.sy.lo, l.sy.hi))
+        continue;
+      cairo_move_to(cr, r.x, l.sy.map(v));
+      cairo_line_to(cr, r.right(), l.sy.map(v));
+    }
+    cairo_stroke(cr);
+
+    // series, clipped to the plot area
+    cairo_save(cr);
+    cairo_rectangle(cr, r.x, r.y, r.w, r.h);
+    cairo_clip(cr);
+    for (std::size_t i = 0; i < p.series.size(); ++i) draw_series(cr, p.series[i], i, l.sx, l.sy);
+    cairo_restore(cr);
+
+    // frame and ticks
+    cairo_set_dash(cr, nullptr, 0, 0);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_set_line_width(cr, 1.0);
+    cairo_rectangle(cr, r.x, r.y, r.w, r.h);
+    cairo_stroke(cr);
+    const double major = 0.5 * fs.base, minor = 0.28 * fs.base;
+    for (const auto& t : l.tx) {
+      const double x = l.sx.map(t.v);
+      cairo_move_to(cr, x, r.bottom());
+      cairo_line_to(cr, x, r.bottom() - (t.major ? major : minor));
+    }
+    for (const auto& t : l.ty) {
+      const double yy = l.sy.map(t.v);
+      cairo_move_to(cr, r.x, yy);
+      cairo_line_to(cr, r.x + (t.major ? major : minor), yy);
+    }
+    cairo_stroke(cr);
+    for (const auto& t : l.tx)
+      if (!t.label.base.empty())
+        draw_label(cr, t.label, l.sx.map(t.v), r.bottom() + 0.95 * fs.tick, 0.5, fs.tick);
+    double wmax = 0;
+    for (const auto& t : l.ty) {
+      if (t.label.base.empty()) continue;
+      wmax = std::max(wmax, label_width(cr, t.label, fs.tick));
+      draw_label(cr, t.label, r.x - 0.5 * fs.tick, l.sy.map(t.v), 1, fs.tick);
+    }
+
+    // axis titles
+    font(cr, fs.label);
+    const auto xt = axis_title(p.x);
+    if (!xt.empty()) text(cr, xt, r.x + 0.5 * r.w, r.bottom() + 1.6 * fs.tick + 1.0 * fs.label, 0.5);
+    const auto yt = axis_title(p.y);
+    if (!yt.empty()) {
+      cairo_save(cr);
+      cairo_translate(cr, r.x - 0.5 * fs.tick - wmax - 0.9 * fs.label, r.y + 0.5 * r.h);
+      cairo_rotate(cr, -std::numbers::pi / 2);
+      text(cr, yt, 0, 0, 0.5);
+      cairo_restore(cr);
+    }
+    if (!p.title.empty()) {
+      font(cr, fs.label, true);
+      text(cr, p.title, r.x + 0.5 * r.w, r.y - 0.9 * fs.label, 0.5);
+    }
+    if (!l.legend.entries.empty()) draw_legend(cr, l.legend, p, fs.legend);
+  }
+}
+
+std::string lower_ext(const std::string& path) {
+  const auto dot = path.find_last_of('.');
+  const auto slash = path.find_last_of('/');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return {};
+  std::string e = path.substr(dot + 1);
+  for (auto& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return e;
+}
+
+void check(cairo_status_t st, const std::string& path, const char* what) {
+  if (st != CAIRO_STATUS_SUCCESS)
+    throw Error(Errc::io_error,
+                fmt::format("cannot {} '{}': {}", what, path, cairo_status_to_string(st)));
+}
+
+void check_range(const std::string& field, double v, double lo, double hi) {
+  if (!(v >= lo && v <= hi)) throw Error::out_of_range(field, v, lo, hi);
+}
+
+}  // namespace
+
+Rgba palette_color(std::size_t index) {
+  // Okabe & Ito (2008), "Color Universal Design"; yellow last (weak on white).
+  static constexpr std::array<std::array<int, 3>, 8> kColors{{{0, 114, 178},
+                                                              {213, 94, 0},
+                                                              {0, 158, 115},
+                                                              {204, 121, 167},
+                                                              {230, 159, 0},
+                                                              {86, 180, 233},
+                                                              {0, 0, 0},
+                                                              {240, 228, 66}}};
+  const auto& c = kColors[index % kColors.size()];
+  return {c[0] / 255.0, c[1] / 255.0, c[2] / 255.0, 1};
+}
+
+void Figure::validate() const {
+  check_range("width", width, 100, 20000);
+  check_range("height", height, 100, 20000);
+  if (panels.empty() || panels.size() > 4)
+    throw Error(Errc::out_of_range,
+                fmt::format("panels has {} entries, allowed 1 to 4", panels.size()), "panels");
+  for (std::size_t k = 0; k < panels.size(); ++k) {
+    const Panel& p = panels[k];
+    const std::string pf = fmt::format("panels[{}]", k);
+    check_range(pf + ".height_ratio", p.height_ratio, 0.05, 20);
+    for (const auto& [axis, name] : {std::pair{&p.x, "x"}, std::pair{&p.y, "y"}}) {
+      const std::string af = fmt::format("{}.{}", pf, name);
+      if (axis->min && !std::isfinite(*axis->min))
+        throw Error::invalid(af + ".min", "must be finite");
+      if (axis->max && !std::isfinite(*axis->max))
+        throw Error::invalid(af + ".max", "must be finite");
+      if (axis->log && axis->min && !(*axis->min > 0))
+        throw Error::out_of_range(af + ".min", *axis->min, std::numeric_limits<double>::min(),
+                                  std::numeric_limits<double>::max());
+      if (axis->log && axis->max && !(*axis->max > 0))
+        throw Error::out_of_range(af + ".max", *axis->max, std::numeric_limits<double>::min(),
+                                  std::numeric_limits<double>::max());
+      if (axis->min && axis->max && !(*axis->max > *axis->min))
+        throw Error::invalid(af, fmt::format("max {:g} must be above min {:g}", *axis->max,
+                                             *axis->min));
+    }
+    for (std::size_t i = 0; i < p.series.size(); ++i) {
+      const Series& s = p.series[i];
+      const std::string sf = fmt::format("{}.series[{}]", pf, i);
+      if (s.x.size() != s.y.size())
+        throw Error::invalid(sf + ".y", fmt::format("has {} values for {} x values",
+                                                    s.y.size(), s.x.size()));
+      if (!s.sigma.empty() && s.sigma.size() != s.y.size())
+        throw Error::invalid(sf + ".sigma", fmt::format("has {} values for {} y values",
+                                                        s.sigma.size(), s.y.size()));
+      for (std::size_t j = 0; j < s.sigma.size(); ++j)
+        if (!(s.sigma[j] >= 0) || !std::isfinite(s.sigma[j]))
+          throw Error::invalid(fmt::format("{}.sigma[{}]", sf, j), "must be finite and >= 0");
+      check_range(sf + ".line_width", s.line_width, 0.1, 50);
+      check_range(sf + ".marker_size", s.marker_size, 0.5, 100);
+      if (s.color)
+        for (double c : {s.color->r, s.color->g, s.color->b, s.color->a})
+          check_range(sf + ".color", c, 0, 1);
+    }
+  }
+}
+
+ImageFormat image_format_from_path(const std::string& path) {
+  const auto e = lower_ext(path);
+  if (e == "png") return ImageFormat::png;
+  if (e == "svg") return ImageFormat::svg;
+  if (e == "pdf") return ImageFormat::pdf;
+  throw Error::invalid("path", fmt::format("'{}' does not end in .png, .svg or .pdf", path));
+}
+
+void write_figure(const Figure& figure, const std::string& path) {
+  figure.validate();
+  const ImageFormat format = image_format_from_path(path);
+  SurfacePtr surface(nullptr, cairo_surface_destroy);
+  if (format == ImageFormat::png) {
+    surface.reset(cairo_image_surface_create(CAIRO_FORMAT_RGB24,
+                                             static_cast<int>(std::lround(figure.width)),
+                                             static_cast<int>(std::lround(figure.height))));
+  } else if (format == ImageFormat::svg) {
+    surface.reset(cairo_svg_surface_create(path.c_str(), figure.width, figure.height));
+  } else {
+    surface.reset(cairo_pdf_surface_create(path.c_str(), figure.width, figure.height));
+  }
+  check(cairo_surface_status(surface.get()), path, "create");
+  {
+    ContextPtr cr(cairo_create(surface.get()), cairo_destroy);
+    draw_figure(cr.get(), figure);
+    check(cairo_status(cr.get()), path, "draw");
+  }
+  if (format == ImageFormat::png)
+    check(cairo_surface_write_to_png(surface.get(), path.c_str()), path, "write");
+  cairo_surface_finish(surface.get());
+  check(cairo_surface_status(surface.get()), path, "write");
+}
+
+// ---- images ----------------------------------------------------------------------------
+
+Image::Image(int w, int h, std::array<std::uint8_t, 3> fill) : width(w), height(h) {
+  if (w < 0 || h < 0) throw Error::invalid("image", "negative size");
+  rgb.resize(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 3);
+  for (std::size_t i = 0; i < rgb.size(); i += 3) {
+    rgb[i] = fill[0];
+    rgb[i + 1] = fill[1];
+    rgb[i + 2] = fill[2];
+  }
+}
+
+std::array<std::uint8_t, 3> Image::at(int x, int y) const {
+  const auto i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+                  static_cast<std::size_t>(x)) * 3;
+  return {rgb.at(i), rgb.at(i + 1), rgb.at(i + 2)};
+}
+
+void Image::set(int x, int y, std::array<std::uint8_t, 3> c) {
+  const auto i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+                  static_cast<std::size_t>(x)) * 3;
+  rgb.at(i) = c[0];
+  rgb.at(i + 1) = c[1];
+  rgb.at(i + 2) = c[2];
+}
+
+void write_png(const Image& image, const std::string& path) {
+  if (image.width <= 0 || image.height <= 0 ||
+      image.rgb.size() != static_cast<std::size_t>(image.width) *
+                              static_cast<std::size_t>(image.height) * 3)
+    throw Error::invalid("image", fmt::format("{}×{} image with {} bytes", image.width,
+                                              image.height, image.rgb.size()));
+  SurfacePtr s(cairo_image_surface_create(CAIRO_FORMAT_RGB24, image.width, image.height),
+               cairo_surface_destroy);
+  check(cairo_surface_status(s.get()), path, "create");
+  cairo_surface_flush(s.get());
+  unsigned char* data = cairo_image_surface_get_data(s.get());
+  const int stride = cairo_image_surface_get_stride(s.get());
+  for (int y = 0; y < image.height; ++y) {
+    auto* row = reinterpret_cast<std::uint32_t*>(data + static_cast<std::ptrdiff_t>(y) * stride);
+    for (int x = 0; x < image.width; ++x) {
+      const auto c = image.at(x, y);
+      row[x] = (std::uint32_t{c[0]} << 16) | (std::uint32_t{c[1]} << 8) | std::uint32_t{c[2]};
+    }
+  }
+  cairo_surface_mark_dirty(s.get());
+  check(cairo_surface_write_to_png(s.get(), path.c_str()), path, "write");
+}
+
+Image read_png(const std::string& path) {
+  SurfacePtr src(cairo_image_surface_create_from_png(path.c_str()), cairo_surface_destroy);
+  const auto st = cairo_surface_status(src.get());
+  if (st == CAIRO_STATUS_FILE_NOT_FOUND)
+    throw Error(Errc::not_found, fmt::format("PNG file '{}' not found", path));
+  if (st != CAIRO_STATUS_SUCCESS)
+    throw Error(Errc::parse_error,
+                fmt::format("cannot read PNG '{}': {}", path, cairo_status_to_string(st)));
+  const int w = cairo_image_surface_get_width(src.get());
+  const int h = cairo_image_surface_get_height(src.get());
+  // Composite over white into a known layout, whatever the PNG's colour type was.
+  SurfacePtr dst(cairo_image_surface_create(CAIRO_FORMAT_RGB24, w, h), cairo_surface_destroy);
+  {
+    ContextPtr cr(cairo_create(dst.get()), cairo_destroy);
+    cairo_set_source_rgb(cr.get(), 1, 1, 1);
+    cairo_paint(cr.get());
+    cairo_set_source_surface(cr.get(), src.get(), 0, 0);
+    cairo_paint(cr.get());
+  }
+  cairo_surface_flush(dst.get());
+  const unsigned char* data = cairo_image_surface_get_data(dst.get());
+  const int stride = cairo_image_surface_get_stride(dst.get());
+  Image img(w, h);
+  for (int y = 0; y < h; ++y) {
+    const auto* row =
+        reinterpret_cast<const std::uint32_t*>(data + static_cast<std::ptrdiff_t>(y) * stride);
+    for (int x = 0; x < w; ++x)
+      img.set(x, y, {static_cast<std::uint8_t>(row[x] >> 16), static_cast<std::uint8_t>(row[x] >> 8),
+                     static_cast<std::uint8_t>(row[x])});
+  }
+  return img;
+}
+
+}  // namespace gonio::twin
