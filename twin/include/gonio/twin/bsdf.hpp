@@ -20,6 +20,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json_fwd.hpp>
@@ -82,6 +83,13 @@ BsdfPtr make_bsdf(std::string_view spec, const WavelengthGrid& grid);
 // The same from JSON: a spec string, an object {"type": "lambert", "albedo": 0.8}, or an
 // array of such objects (a sum of lobes).
 BsdfPtr make_bsdf(const nlohmann::json& spec, const WavelengthGrid& grid);
+// Spec strings as std::string or literals: both of the overloads above would accept them.
+inline BsdfPtr make_bsdf(const std::string& spec, const WavelengthGrid& grid) {
+  return make_bsdf(std::string_view(spec), grid);
+}
+inline BsdfPtr make_bsdf(const char* spec, const WavelengthGrid& grid) {
+  return make_bsdf(std::string_view(spec), grid);
+}
 
 // Loads a tabulated BSDF file by extension: .bsdf (Zemax/Radiant IS-SA), .ssdd, .binary
 // (MERL). Defined in the tabulated family.

@@ -1,0 +1,93 @@
+// conductor — rough metal: a Cook-Torrance microfacet BRDF (Walter et al. 2007,
+// "Microfacet Models for Refraction through Rough Surfaces", eq. 20)
+//   f = F(wi·h) D(h) G2(wi, wo) / (4 |cos θi| |cos θo|),  h = (wi + wo)/|wi + wo|
+// with the GGX (Trowbridge-Reitz) distribution, the height-correlated Smith G2 and the
+// complex Fresnel reflectance of η + i k per channel. Two-sided. Sampled through the
+// visible normals of wo (the Fresnel term is left out of the density, which is the same
+// for every channel): pdf = D_wo(h) / (4 wo·h) = G1(wo) D(h) / (4 cos θo) (Heitz 2018 §2).
+// The `beckmann` model is this class with the Beckmann distribution.
+#include "bsdf/conductor.hpp"
+
+#include "bsdf/fresnel.hpp"
+#include "bsdf/sampling.hpp"
+
+namespace gonio::twin::bsdf {
+namespace {
+
+class RoughConductor final : public Lobe {
+ public:
+  RoughConductor(const Params& p, const WavelengthGrid& grid, Distribution d)
+      : Lobe(grid, p.spec()),
+        mf_{d, p.scalar("alpha")},
+        eta_(p.spectrum("eta")),
+        k_(p.spectrum("k")) {}
+
+  void eval(const Vec3& wi_in, const Vec3& wo_in, std::span<double> out) const override {
+    for (auto& v : out) v = 0.0;
+    if (!same_hemisphere(wi_in, wo_in)) return;
+    const Vec3 wi = wo_in.z < 0 ? flip_z(wi_in) : wi_in;
+    const Vec3 wo = wo_in.z < 0 ? flip_z(wo_in) : wo_in;
+    const Vec3 h = normalize(wi + wo);
+    const double common = mf_.D(h) * mf_.G2(wi, wo) / (4.0 * wi.z * wo.z);
+    if (!(common > 0)) return;
+    const double cos_h = dot(wi, h);
+    for (std::size_t c = 0; c < out.size(); ++c)
+      out[c] = common * fresnel_conductor(cos_h, eta_[c], k_[c]);
+  }
+
+  std::optional<BsdfSample> sample_wi(const Vec3& wo_in, double, Vec2 u) const override {
+    if (wo_in.z == 0) return std::nullopt;
+    const Vec3 wo = wo_in.z < 0 ? flip_z(wo_in) : wo_in;
+    const Vec3 m = mf_.sample_visible(wo, u);
+    Vec3 wi = reflect(wo, m);
+    if (wi.z <= 0) return std::nullopt;
+    if (wo_in.z < 0) wi = flip_z(wi);
+    const double p = pdf(wo_in, wi);
+    if (!(p > 0)) return std::nullopt;
+    return BsdfSample{wi, p};
+  }
+
+  double pdf(const Vec3& wo_in, const Vec3& wi_in) const override {
+    if (!same_hemisphere(wi_in, wo_in)) return 0.0;
+    const Vec3 wi = wo_in.z < 0 ? flip_z(wi_in) : wi_in;
+    const Vec3 wo = wo_in.z < 0 ? flip_z(wo_in) : wo_in;
+    const Vec3 h = normalize(wi + wo);
+    return mf_.G1(wo) * mf_.D(h) / (4.0 * wo.z);
+  }
+
+  double albedo_hint(const Vec3& wo) const override {
+    double s = 0;
+    for (std::size_t c = 0; c < eta_.size(); ++c)
+      s += fresnel_conductor(abs_cos_theta(wo), eta_[c], k_[c]);
+    return s / static_cast<double>(eta_.size());
+  }
+
+ private:
+  Microfacet mf_;
+  std::vector<double> eta_, k_;
+};
+
+BsdfPtr build(const Params& p, const WavelengthGrid& grid) {
+  return make_rough_conductor(p, grid, Distribution::ggx);
+}
+
+}  // namespace
+
+BsdfPtr make_rough_conductor(const Params& p, const WavelengthGrid& grid, Distribution d) {
+  return std::make_shared<RoughConductor>(p, grid, d);
+}
+
+std::vector<ParamInfo> conductor_params() {
+  // Default η, k: aluminium near 550 nm (Rakić 1995, Applied Optics 34(22)), n ≈ 0.96,
+  // k ≈ 6.69: a neutral, bright metal.
+  return {{"alpha", false, 0.001, 1, false, 0.1, ""},
+          {"eta", true, 0, 10, true, 0.96, ""},
+          {"k", true, 0, 20, false, 6.69, ""}};
+}
+
+const ModelInfo& conductor_model() {
+  static const ModelInfo info{"conductor", conductor_params(), &build};
+  return info;
+}
+
+}  // namespace gonio::twin::bsdf
