@@ -88,7 +88,8 @@ ErrorEntry parse_error_entry(std::string_view reply) {
   const auto comma = s.find(',');
   if (comma == std::string_view::npos) bad("error queue entry", reply, "expected <code>,\"<text>\"");
   ErrorEntry e;
-  const auto code = trim(s.substr(0, comma));
+  auto code = trim(s.substr(0, comma));
+  if (code.size() > 1 && code.front() == '+') code.remove_prefix(1);  // NR1 may carry a sign
   const auto [p, ec] = std::from_chars(code.data(), code.data() + code.size(), e.code);
   if (code.empty() || ec != std::errc() || p != code.data() + code.size())
     bad("error queue entry", reply, "the code is not an integer");

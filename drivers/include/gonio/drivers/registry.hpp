@@ -1,0 +1,54 @@
+// The driver registry — a static table of every driver by name with its capabilities
+// (DESIGN §7.4: the mock is a driver like any other).
+//
+//   name          motion  photometer  what
+//   modbus        yes     -           Modbus RTU/TCP motion controllers (modbus_motion.hpp)
+//   mock          yes     yes         the twin-backed virtual lab (mock.hpp)
+//   scpi-serial   -       yes         SCPI photometer on a serial line (serial.hpp keys)
+//   scpi-tcp      -       yes         SCPI photometer on a raw TCP socket (transport_tcp.hpp)
+//   scpi-usbtmc   -       yes         SCPI photometer over USBTMC via libusb (key "usb")
+//
+// Instrument config (JSON, strict): {"motion": {"driver": NAME, ...driver keys},
+// "photometer": {"driver": NAME, ...driver keys}}. When both sides are "mock", the lab is
+// configured on the motion side and the photometer side must be just {"driver": "mock"}:
+// both then share one virtual lab (the photometer sees where the arms are).
+#pragma once
+
+#include <memory>
+#include <span>
+#include <string_view>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "gonio/drivers/motion_controller.hpp"
+#include "gonio/drivers/photometer.hpp"
+
+namespace gonio::drivers {
+
+struct DriverInfo {
+  std::string_view name;
+  std::string_view description;
+  bool motion = false;         // provides a MotionController
+  bool photometer = false;     // provides a Photometer
+  bool needs_hardware = true;  // false: runs without devices (mock)
+  std::unique_ptr<MotionController> (*make_motion)(const nlohmann::json& config) = nullptr;
+  std::unique_ptr<Photometer> (*make_photometer)(const nlohmann::json& config) = nullptr;
+};
+
+std::span<const DriverInfo> drivers() noexcept;
+// Throws Error(not_found) listing the known names.
+const DriverInfo& find_driver(std::string_view name);
+
+// `config` holds the driver's own keys (no "driver" key). Throws Error(unsupported) when
+// the driver has no such side.
+std::unique_ptr<MotionController> make_motion(std::string_view driver, const nlohmann::json& config);
+std::unique_ptr<Photometer> make_photometer(std::string_view driver, const nlohmann::json& config);
+
+struct Instrument {
+  std::unique_ptr<MotionController> motion;
+  std::unique_ptr<Photometer> photometer;
+};
+// From the instrument config above; errors name the field ("motion.driver", ...).
+Instrument open_instrument(const nlohmann::json& config);
+
+}  // namespace gonio::drivers

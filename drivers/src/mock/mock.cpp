@@ -1,0 +1,393 @@
+// The mock instrument (mock.hpp): a virtual lab shared by a MotionController and a
+// Photometer. Readings come from the twin at the geometry where the arms stand; noise,
+// lamp drift and faults are drawn from one seeded generator on a virtual clock, so a run
+// is the same for the same seed and the same sequence of calls.
+#include "gonio/drivers/mock.hpp"
+
+#include <atomic>
+#include <cmath>
+#include <condition_variable>
+#include <map>
+#include <mutex>
+#include <random>
+#include <thread>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "gonio/drivers/collision.hpp"
+#include "gonio/proto/error.hpp"
+#include "gonio/proto/json_util.hpp"
+#include "gonio/twin/twin.hpp"
+
+namespace gonio::drivers::mock {
+
+struct Faults {
+  int disconnect_at_point = 0, timeout_at_point = 0, garbage_at_point = 0, saturate_at_point = 0;
+  int stall_at_move = 0;
+  milliseconds timeout_wait{200};
+};
+
+struct LabConfig {
+  twin::InstrumentProfile profile;
+  nlohmann::json sample = "lambert:albedo=0.5";
+  WavelengthGrid grid = WavelengthGrid::visible();
+  double lamp_drift_per_s = 0;
+  double gain = 400, dark = 2, read_noise = 3, full_scale = 1e6, integration_ms = 100;
+  double speed_deg_s = 20, time_scale = 0;
+  std::uint64_t seed = 1;
+  twin::EstimatorOptions estimator;
+  Faults faults;
+};
+
+namespace {
+
+int fault_index(json_util::ObjectReader& r, const char* key) {
+  const int n = r.optional<int>(key, 0);
+  if (n < 0 || n > 1000000) throw Error::out_of_range(r.path(key), n, 0, 1000000);
+  return n;
+}
+
+double bounded(json_util::ObjectReader& r, const char* key, double fallback, double lo, double hi) {
+  const double v = r.optional<double>(key, fallback);
+  if (!(v >= lo && v <= hi)) throw Error::out_of_range(r.path(key), v, lo, hi);
+  return v;
+}
+
+LabConfig read_config(const nlohmann::json& j) {
+  LabConfig c;
+  json_util::ObjectReader r(j, "mock");
+  c.profile = twin::InstrumentProfile::load(r.optional<std::string>("profile", "gcms4"));
+  if (const auto* s = r.raw("sample"); s != nullptr) c.sample = *s;
+  if (r.has("wavelengths"))
+    c.grid = WavelengthGrid::parse(r.required<std::string>("wavelengths"), r.path("wavelengths"));
+  if (const auto* a = r.raw("arm_offsets_deg"); a != nullptr) {
+    json_util::ObjectReader ar(*a, r.path("arm_offsets_deg"));
+    c.profile.arms.incidence_offset_deg = bounded(ar, "incidence", 0, -10, 10);
+    c.profile.arms.receive_offset_deg = bounded(ar, "receive", 0, -10, 10);
+    ar.finish();
+  }
+  c.lamp_drift_per_s = bounded(r, "lamp_drift_per_s", 0, -0.1, 0.1);
+  c.gain = bounded(r, "gain_counts_per_ms", c.gain, 0, 1e9);
+  c.dark = bounded(r, "dark_counts_per_ms", c.dark, 0, 1e9);
+  c.read_noise = bounded(r, "read_noise_counts", c.read_noise, 0, 1e9);
+  c.full_scale = bounded(r, "full_scale_counts", c.full_scale, 1, 1e15);
+  c.integration_ms = bounded(r, "integration_ms", c.integration_ms, 0.01, 60000);
+  c.speed_deg_s = bounded(r, "speed_deg_s", c.speed_deg_s, 0.01, 1000);
+  c.time_scale = bounded(r, "time_scale", c.time_scale, 0, 10);
+  c.seed = r.optional<std::uint64_t>("seed", c.seed);
+  c.estimator.rel_se = 1e-2;
+  c.estimator.max_samples = 1u << 16;
+  c.estimator.replicates = 8;
+  if (const auto* e = r.raw("estimator"); e != nullptr) {
+    json_util::ObjectReader er(*e, r.path("estimator"));
+    c.estimator.rel_se = bounded(er, "rel_se", c.estimator.rel_se, 1e-6, 1);
+    c.estimator.max_samples = er.optional<std::uint64_t>("max_samples", c.estimator.max_samples);
+    c.estimator.replicates = er.optional<int>("replicates", c.estimator.replicates);
+    er.finish();
+  }
+  c.estimator.seed = c.seed;
+  c.estimator.validate();
+  if (const auto* f = r.raw("faults"); f != nullptr) {
+    json_util::ObjectReader fr(*f, r.path("faults"));
+    c.faults.disconnect_at_point = fault_index(fr, "disconnect_at_point");
+    c.faults.timeout_at_point = fault_index(fr, "timeout_at_point");
+    c.faults.garbage_at_point = fault_index(fr, "garbage_at_point");
+    c.faults.saturate_at_point = fault_index(fr, "saturate_at_point");
+    c.faults.stall_at_move = fault_index(fr, "stall_at_move");
+    c.faults.timeout_wait = milliseconds(static_cast<long long>(bounded(fr, "timeout_wait_ms", 200, 0, 600000)));
+    fr.finish();
+  }
+  r.finish();
+  c.profile.validate();
+  return c;
+}
+
+std::size_t axis_index(Axis a) { return static_cast<std::size_t>(a); }
+
+}  // namespace
+
+devsim::BetaSource twin_beta_source(std::shared_ptr<const twin::Twin> tw,
+                                    const twin::EstimatorOptions& options) {
+  struct Cache {
+    std::mutex mu;
+    std::map<std::array<double, 4>, std::vector<double>> beta;
+  };
+  auto cache = std::make_shared<Cache>();
+  return [tw, options, cache](const Geometry& g) {
+    const std::array<double, 4> key{g.theta_i, g.phi_i, g.theta_r, g.phi_r};
+    {
+      std::lock_guard lock(cache->mu);
+      if (const auto it = cache->beta.find(key); it != cache->beta.end()) return it->second;
+    }
+    auto beta = tw->predict(g, options).beta;
+    std::lock_guard lock(cache->mu);
+    if (cache->beta.size() > 4096) cache->beta.clear();
+    cache->beta.emplace(key, beta);
+    return beta;
+  };
+}
+
+class Lab {
+ public:
+  explicit Lab(LabConfig c)
+      : cfg_(std::move(c)), rng_(cfg_.seed), guard_(cfg_.profile.arms.min_separation_deg) {
+    auto bsdf = twin::make_bsdf(cfg_.sample, cfg_.grid);
+    twin_ = std::make_shared<twin::Twin>(cfg_.profile, std::move(bsdf), cfg_.grid);
+    beta_ = twin_beta_source(twin_, cfg_.estimator);
+    pos_ = {0, 45, 0, 0};  // arms apart at rest
+    integration_ms_ = cfg_.integration_ms;
+  }
+
+  const LabConfig& config() const { return cfg_; }
+
+  void check_link() const {
+    if (disconnected_) throw Error(Errc::disconnected, "mock instrument: link lost (scripted fault)");
+  }
+
+  // ---- motion ----
+  void move(Axis a, double target, milliseconds timeout) {
+    std::unique_lock lock(mu_);
+    check_link();
+    stop_ = false;
+    const double from = pos_[axis_index(a)];
+    std::optional<double> other;
+    if (a == Axis::incidence) other = pos_[axis_index(Axis::receive)];
+    if (a == Axis::receive) other = pos_[axis_index(Axis::incidence)];
+    guard_.check_move(a, from, target, other);
+    ++moves_;
+    const bool stall = cfg_.faults.stall_at_move == moves_;
+    const double dest = stall ? from + 0.5 * (target - from) : target;
+    const double seconds = std::fabs(dest - from) / cfg_.speed_deg_s;
+    if (cfg_.time_scale > 0) {
+      const auto real = std::chrono::duration<double>(seconds * cfg_.time_scale);
+      if (real > timeout) {
+        lock.unlock();
+        sleep_interruptible(timeout);
+        throw Error(Errc::timeout, fmt::format("mock {}: move to {:g}° did not finish in {} ms",
+                                               axis_name(a), target, timeout.count()));
+      }
+      lock.unlock();
+      sleep_interruptible(std::chrono::duration_cast<milliseconds>(real));
+      lock.lock();
+      if (stop_) throw Error(Errc::invalid_state, fmt::format("mock {}: move stopped", axis_name(a)));
+    }
+    clock_s_ += seconds;
+    pos_[axis_index(a)] = dest;
+    if (stall) {
+      alarm_[axis_index(a)] = 0x10;
+      throw Error(Errc::device_alarm,
+                  fmt::format("mock {}: alarm 0x10 (excessive position deviation): stalled at {:g}° "
+                              "on the way to {:g}°", axis_name(a), dest, target));
+    }
+  }
+
+  double position(Axis a) {
+    std::lock_guard lock(mu_);
+    check_link();
+    return pos_[axis_index(a)];
+  }
+
+  AxisStatus status(Axis a) {
+    std::lock_guard lock(mu_);
+    check_link();
+    AxisStatus s;
+    s.alarm_code = alarm_[axis_index(a)];
+    s.alarm = s.alarm_code != 0;
+    s.ready = !s.alarm;
+    s.in_position = !s.alarm;
+    s.position_deg = s.command_deg = pos_[axis_index(a)];
+    s.home_end = homed_[axis_index(a)];
+    return s;
+  }
+
+  void home(Axis a, milliseconds timeout) {
+    move(a, 0, timeout);
+    std::lock_guard lock(mu_);
+    homed_[axis_index(a)] = true;
+  }
+
+  void reset_alarm(Axis a) {
+    std::lock_guard lock(mu_);
+    check_link();
+    alarm_[axis_index(a)] = 0;
+  }
+
+  void stop() {
+    stop_ = true;
+    cv_.notify_all();
+  }
+
+  // ---- photometer ----
+  Reading measure(Channel ch, milliseconds timeout) {
+    std::unique_lock lock(mu_);
+    check_link();
+    int point = 0;
+    if (ch == Channel::sample) point = ++points_;
+    const auto& f = cfg_.faults;
+    if (point != 0 && point == f.disconnect_at_point) {
+      disconnected_ = true;
+      check_link();
+    }
+    if (point != 0 && point == f.timeout_at_point) {
+      lock.unlock();
+      sleep_interruptible(std::min(timeout, f.timeout_wait));
+      throw Error(Errc::timeout, fmt::format("mock photometer: no reply to reading {} (scripted fault)", point));
+    }
+    if (point != 0 && point == f.garbage_at_point)
+      throw Error(Errc::protocol_error,
+                  fmt::format("mock photometer: reading {} is garbage (scripted fault)", point));
+    const double t = integration_ms_;
+    clock_s_ += t / 1000;
+    const double lamp = 1 + cfg_.lamp_drift_per_s * clock_s_;
+    std::vector<double> beta(cfg_.grid.size(), 0.0);
+    if (ch == Channel::sample) {
+      lock.unlock();  // the twin may take a while; the lab stays usable (stop())
+      beta = beta_(geometry());
+      lock.lock();
+    } else if (ch == Channel::reference) {
+      beta.assign(cfg_.grid.size(), 1.0);
+    }
+    Reading r;
+    r.channel = ch;
+    r.unit = "counts";
+    r.integration_ms = t;
+    std::vector<double> val(beta.size()), unc(beta.size());
+    std::normal_distribution<double> gauss(0, 1);
+    for (std::size_t i = 0; i < beta.size(); ++i) {
+      const double mean = cfg_.dark * t + cfg_.gain * t * lamp * std::max(0.0, beta[i]);
+      const double sd = std::sqrt(mean + cfg_.read_noise * cfg_.read_noise);
+      double v = mean + sd * gauss(rng_);
+      if (v >= cfg_.full_scale) {
+        v = cfg_.full_scale;
+        r.saturated = true;
+      }
+      val[i] = std::max(0.0, v);
+      unc[i] = sd;
+    }
+    if (point != 0 && point == f.saturate_at_point) {
+      r.saturated = true;
+      val.assign(val.size(), cfg_.full_scale);
+    }
+    r.spectrum = Spectrum(cfg_.grid, std::move(val), std::move(unc));
+    return r;
+  }
+
+  double integration_ms() {
+    std::lock_guard lock(mu_);
+    check_link();
+    return integration_ms_;
+  }
+  void set_integration_ms(double ms) {
+    std::lock_guard lock(mu_);
+    check_link();
+    if (!(ms >= 0.01 && ms <= 60000)) throw Error::out_of_range("integration_ms", ms, 0.01, 60000, " ms");
+    integration_ms_ = ms;
+  }
+
+  // The nominal geometry where the arms stand (the twin adds the arm offsets itself).
+  Geometry geometry() {
+    std::lock_guard lock(mu_);
+    double ti = pos_[axis_index(Axis::incidence)], tr = pos_[axis_index(Axis::receive)];
+    if (ti < 0) {  // mirror image: same configuration for the plane of measurement
+      ti = -ti;
+      tr = -tr;
+    }
+    ti = std::min(ti, Geometry::kMaxIncidence);
+    const double phi = -pos_[axis_index(Axis::rotation)];
+    Geometry g{ti, phi, tr, phi};
+    g.phi_i = std::remainder(g.phi_i, 360.0);
+    g.phi_r = g.phi_i;
+    return g;
+  }
+
+  std::shared_ptr<const twin::Twin> twin() const { return twin_; }
+  int points() const {
+    std::lock_guard lock(mu_);
+    return points_;
+  }
+
+ private:
+  void sleep_interruptible(milliseconds d) {
+    std::unique_lock lock(sleep_mu_);
+    cv_.wait_for(lock, d, [&] { return stop_.load(); });
+  }
+
+  LabConfig cfg_;
+  std::shared_ptr<twin::Twin> twin_;
+  devsim::BetaSource beta_;
+  mutable std::mutex mu_;
+  std::mutex sleep_mu_;
+  std::condition_variable cv_;
+  std::atomic<bool> stop_{false};
+  std::mt19937_64 rng_;
+  MotionGuard guard_;
+  std::array<double, 4> pos_{};
+  std::array<std::uint32_t, 4> alarm_{};
+  std::array<bool, 4> homed_{};
+  double clock_s_ = 0;
+  double integration_ms_ = 100;
+  int moves_ = 0, points_ = 0;
+  bool disconnected_ = false;
+};
+
+namespace {
+
+class MockMotion final : public MotionController {
+ public:
+  explicit MockMotion(std::shared_ptr<Lab> lab) : lab_(std::move(lab)) {}
+  MotionCapabilities capabilities() const override { return {}; }
+  std::vector<Axis> axes() const override { return {kAllAxes.begin(), kAllAxes.end()}; }
+  void move(Axis a, double target, milliseconds timeout) override { lab_->move(a, target, timeout); }
+  double position(Axis a, milliseconds) override { return lab_->position(a); }
+  AxisStatus status(Axis a, milliseconds) override { return lab_->status(a); }
+  void home(Axis a, milliseconds timeout) override { lab_->home(a, timeout); }
+  void reset_alarm(Axis a, milliseconds) override { lab_->reset_alarm(a); }
+  void stop(milliseconds) override { lab_->stop(); }
+
+ private:
+  std::shared_ptr<Lab> lab_;
+};
+
+class MockPhotometer final : public Photometer {
+ public:
+  explicit MockPhotometer(std::shared_ptr<Lab> lab) : lab_(std::move(lab)) {}
+  PhotometerCapabilities capabilities() const override { return {true, true, true, true}; }
+  Identity identify(milliseconds) override {
+    lab_->check_link();
+    return {"GONIO", "MOCK", fmt::format("seed-{}", lab_->config().seed), "1.0"};
+  }
+  WavelengthGrid wavelengths(milliseconds) override {
+    lab_->check_link();
+    return lab_->config().grid;
+  }
+  double integration_ms(milliseconds) override { return lab_->integration_ms(); }
+  void set_integration_ms(double ms, milliseconds) override { lab_->set_integration_ms(ms); }
+  Reading measure(Channel ch, milliseconds timeout, SaturationPolicy policy) override {
+    auto r = lab_->measure(ch, timeout);
+    check_saturation(r, policy);
+    return r;
+  }
+  void cancel() noexcept override { lab_->stop(); }
+
+ private:
+  std::shared_ptr<Lab> lab_;
+};
+
+}  // namespace
+
+MockInstrument make_mock(const nlohmann::json& config) {
+  auto lab = std::make_shared<Lab>(read_config(config));
+  return {std::make_unique<MockMotion>(lab), std::make_unique<MockPhotometer>(lab), lab};
+}
+
+std::unique_ptr<MotionController> make_mock_motion(const nlohmann::json& config) {
+  return std::move(make_mock(config).motion);
+}
+
+std::unique_ptr<Photometer> make_mock_photometer(const nlohmann::json& config) {
+  return std::move(make_mock(config).photometer);
+}
+
+}  // namespace gonio::drivers::mock

@@ -1,0 +1,111 @@
+// The static driver table and the instrument factory (registry.hpp).
+#include "gonio/drivers/registry.hpp"
+
+#include <array>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "gonio/drivers/mock.hpp"
+#include "gonio/drivers/modbus/modbus_motion.hpp"
+#include "gonio/drivers/scpi.hpp"
+#include "gonio/proto/error.hpp"
+#include "gonio/proto/json_util.hpp"
+
+namespace gonio::drivers {
+namespace {
+
+std::unique_ptr<MotionController> modbus_motion(const nlohmann::json& c) { return make_modbus_motion(c); }
+std::unique_ptr<Photometer> scpi_serial(const nlohmann::json& c) { return scpi::make_photometer("serial", c); }
+std::unique_ptr<Photometer> scpi_tcp(const nlohmann::json& c) { return scpi::make_photometer("tcp", c); }
+std::unique_ptr<Photometer> scpi_usbtmc(const nlohmann::json& c) { return scpi::make_photometer("usbtmc", c); }
+
+const std::array<DriverInfo, 5> kDrivers{{
+    {"modbus", "Modbus RTU/TCP motion controllers (Oriental Motor AZ preset)", true, false, true,
+     &modbus_motion, nullptr},
+    {"mock", "virtual lab driven by the twin (no hardware)", true, true, false,
+     &mock::make_mock_motion, &mock::make_mock_photometer},
+    {"scpi-serial", "SCPI photometer on a serial line", false, true, true, nullptr, &scpi_serial},
+    {"scpi-tcp", "SCPI photometer on a raw TCP socket", false, true, true, nullptr, &scpi_tcp},
+    {"scpi-usbtmc", "SCPI photometer over USBTMC (libusb)", false, true, true, nullptr, &scpi_usbtmc},
+}};
+
+std::string names() {
+  std::string s;
+  for (const auto& d : kDrivers) s += (s.empty() ? "" : ", ") + std::string(d.name);
+  return s;
+}
+
+// Splits {"driver": X, ...rest}.
+std::pair<std::string, nlohmann::json> split(const nlohmann::json& side, const std::string& field) {
+  if (!side.is_object()) throw Error::invalid(field, "expected an object with a \"driver\" key");
+  const auto it = side.find("driver");
+  if (it == side.end()) throw Error::invalid(join_field(field, "driver"), "is required");
+  auto name = json_util::get_as<std::string>(*it, join_field(field, "driver"));
+  nlohmann::json rest = side;
+  rest.erase("driver");
+  return {name, rest};
+}
+
+}  // namespace
+
+std::span<const DriverInfo> drivers() noexcept { return kDrivers; }
+
+const DriverInfo& find_driver(std::string_view name) {
+  for (const auto& d : kDrivers)
+    if (d.name == name) return d;
+  throw Error(Errc::not_found, fmt::format("no driver '{}' (known: {})", name, names()));
+}
+
+std::unique_ptr<MotionController> make_motion(std::string_view driver, const nlohmann::json& config) {
+  const auto& d = find_driver(driver);
+  if (!d.make_motion) throw Error(Errc::unsupported, fmt::format("driver '{}' has no motion side", driver));
+  return d.make_motion(config);
+}
+
+std::unique_ptr<Photometer> make_photometer(std::string_view driver, const nlohmann::json& config) {
+  const auto& d = find_driver(driver);
+  if (!d.make_photometer)
+    throw Error(Errc::unsupported, fmt::format("driver '{}' has no photometer side", driver));
+  return d.make_photometer(config);
+}
+
+Instrument open_instrument(const nlohmann::json& config) {
+  json_util::ObjectReader r(config, "");
+  const auto* m = r.raw("motion");
+  const auto* p = r.raw("photometer");
+  r.finish();
+  if (m == nullptr) throw Error::invalid("motion", "is required");
+  if (p == nullptr) throw Error::invalid("photometer", "is required");
+  auto [mname, mcfg] = split(*m, "motion");
+  auto [pname, pcfg] = split(*p, "photometer");
+  const auto wrap = [](const std::string& prefix, auto&& f) {
+    try {
+      return f();
+    } catch (const Error& e) {
+      if (e.code() == Errc::invalid_argument || e.code() == Errc::out_of_range)
+        throw json_util::prefixed(e, prefix);
+      throw;
+    }
+  };
+  Instrument out;
+  if (mname == "mock" && pname == "mock") {
+    if (!pcfg.empty())
+      throw Error::invalid("photometer", "a mock photometer shares the motion side's lab: "
+                                         "configure it under \"motion\"");
+    auto lab = wrap("motion", [&] { return mock::make_mock(mcfg); });
+    out.motion = std::move(lab.motion);
+    out.photometer = std::move(lab.photometer);
+    return out;
+  }
+  const auto& md = find_driver(mname);
+  const auto& pd = find_driver(pname);
+  if (!md.make_motion) throw Error::invalid("motion.driver", fmt::format("'{}' has no motion side", mname));
+  if (!pd.make_photometer)
+    throw Error::invalid("photometer.driver", fmt::format("'{}' has no photometer side", pname));
+  out.motion = wrap("motion", [&] { return md.make_motion(mcfg); });
+  out.photometer = wrap("photometer", [&] { return pd.make_photometer(pcfg); });
+  return out;
+}
+
+}  // namespace gonio::drivers
