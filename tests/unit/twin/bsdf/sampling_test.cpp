@@ -113,6 +113,35 @@ std::vector<Case> cases() {
 
 INSTANTIATE_TEST_SUITE_P(Models, SamplingChi2, ::testing::ValuesIn(cases()));
 
+// The test above can fail: a sampler whose reported density is off by ±5 % on either
+// side of the x–z plane (still integrating to 1) is rejected.
+class SkewedPdf final : public Bsdf {
+ public:
+  SkewedPdf() : Bsdf(WavelengthGrid::parse("550")), lambert_(make_bsdf("lambert", wavelengths())) {}
+  void eval(const Vec3& wi, const Vec3& wo, std::span<double> out) const override {
+    lambert_->eval(wi, wo, out);
+  }
+  std::optional<BsdfSample> sample_wi(const Vec3& wo, double ul, Vec2 u) const override {
+    auto s = lambert_->sample_wi(wo, ul, u);
+    if (s) s->pdf = pdf(wo, s->wi);
+    return s;
+  }
+  double pdf(const Vec3& wo, const Vec3& wi) const override {
+    return lambert_->pdf(wo, wi) * (wi.y > 0 ? 1.05 : 0.95);
+  }
+  std::string spec() const override { return "skewed"; }
+
+ private:
+  BsdfPtr lambert_;
+};
+
+TEST(Sampling, Chi2RejectsAWrongPdf) {
+  const SkewedPdf b;
+  const auto r = test::chi2_test(b, dir_deg(30), test::cos_phi_map(), 100000, 99);
+  EXPECT_LT(r.p_value, 1e-6);
+  EXPECT_NEAR(r.pdf_integral, 1.0, 2e-3);
+}
+
 // The weights f |cos θi| / pdf of Lambert are exactly the albedo: the density is
 // proportional to the integrand.
 TEST(Sampling, LambertWeightIsAlbedo) {
