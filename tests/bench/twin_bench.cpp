@@ -1,0 +1,126 @@
+// Twin benchmarks (issue targets, measured here, never asserted in tests):
+//   - per geometry, 31 channels, relative s.e. ≤ 0.1 %: Lambert and conductor α = 0.3,
+//     0.05, 0.01 (target ≤ 5 ms on one core for Lambert and α ≥ 0.1);
+//   - efficiency (1 / (variance × time)) of rqmc over baseline at the same geometry
+//     (target ≥ 50× for α ≤ 0.05);
+//   - a 1,000-geometry scan on 2 threads (target ≤ 10 s).
+// Run: build/release/bin/bench --benchmark_filter=Twin
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cmath>
+#include <map>
+
+#include "gonio/twin/twin.hpp"
+
+namespace gonio::twin {
+namespace {
+
+const WavelengthGrid& grid31() {
+  static const WavelengthGrid g = WavelengthGrid::parse("400:700:10");
+  return g;
+}
+
+const Twin& twin_for(const std::string& spec) {
+  static std::map<std::string, std::unique_ptr<Twin>> cache;
+  auto& t = cache[spec];
+  if (!t) t = std::make_unique<Twin>(InstrumentProfile{}, make_bsdf(spec, grid31()), grid31());
+  return *t;
+}
+
+const char* kSpecs[] = {
+    "lambert:albedo=0.8",
+    "conductor:alpha=0.3,eta=0.2,k=3.9",
+    "conductor:alpha=0.05,eta=0.2,k=3.9",
+    "conductor:alpha=0.01,eta=0.2,k=3.9",
+};
+
+double max_rel_se(const Prediction& p) {
+  double m = 0;
+  for (std::size_t c = 0; c < p.beta.size(); ++c)
+    if (p.beta[c] > 0) m = std::max(m, p.std_error[c] / p.beta[c]);
+  return m;
+}
+
+// One geometry at rel. s.e. ≤ 0.1 %: the specular peak (hardest) and 10° off it.
+void BM_TwinPredict(benchmark::State& state) {
+  const auto& twin = twin_for(kSpecs[state.range(0)]);
+  const auto g = Geometry::in_plane(45, state.range(1) == 0 ? 45 : 35);
+  EstimatorOptions o;
+  o.rel_se = 1e-3;
+  std::uint64_t seed = 1, samples = 0;
+  double rel = 0;
+  for (auto _ : state) {
+    o.seed = seed++;
+    const auto p = twin.predict(g, o);
+    samples += p.samples;
+    rel = std::max(rel, max_rel_se(p));
+    benchmark::DoNotOptimize(p.beta.data());
+  }
+  state.SetLabel(std::string(kSpecs[state.range(0)]) + (state.range(1) == 0 ? " @45/45" : " @45/35"));
+  state.counters["samples"] = benchmark::Counter(static_cast<double>(samples),
+                                                 benchmark::Counter::kAvgIterations);
+  state.counters["max_rel_se"] = rel;
+}
+BENCHMARK(BM_TwinPredict)
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(0.5);
+
+// Efficiency ratio at a fixed budget: each estimator runs with an unreachable s.e. target
+// so that it spends exactly its budget; efficiency = 1 / (s.e.² × seconds), channel-mean.
+void BM_TwinEfficiency(benchmark::State& state) {
+  const auto& twin = twin_for(kSpecs[state.range(0)]);
+  const auto g = Geometry::in_plane(45, state.range(1) == 0 ? 45 : 44);
+  const auto run = [&](EstimatorKind kind, std::uint64_t budget, std::uint64_t seed) {
+    EstimatorOptions o;
+    o.kind = kind;
+    o.rel_se = 1e-6;
+    o.abs_se = 0;
+    o.max_samples = budget;
+    o.seed = seed;
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto p = twin.predict(g, o);
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    double var = 0, beta = 0;
+    for (std::size_t c = 0; c < p.beta.size(); ++c) {
+      var += p.std_error[c] * p.std_error[c];
+      beta += p.beta[c];
+    }
+    return std::tuple{var / static_cast<double>(p.beta.size()), secs, beta / static_cast<double>(p.beta.size())};
+  };
+  double ratio = 0, beta_rqmc = 0, beta_base = 0;
+  std::uint64_t seed = 1;
+  for (auto _ : state) {
+    const auto [vr, tr, br] = run(EstimatorKind::rqmc, 1u << 18, seed);
+    const auto [vb, tb, bb] = run(EstimatorKind::baseline, 1u << 20, seed);
+    ++seed;
+    ratio = (vb * tb) / (vr * tr);
+    beta_rqmc = br, beta_base = bb;
+  }
+  state.SetLabel(std::string(kSpecs[state.range(0)]) + (state.range(1) == 0 ? " @45/45" : " @45/44"));
+  state.counters["rqmc_over_baseline"] = ratio;
+  state.counters["beta_rqmc"] = beta_rqmc;
+  state.counters["beta_baseline"] = beta_base;
+}
+BENCHMARK(BM_TwinEfficiency)
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
+
+// A 1,000-geometry in-plane scan on two threads, glossy conductor.
+void BM_TwinScan1000(benchmark::State& state) {
+  const auto& twin = twin_for("conductor:alpha=0.1,eta=0.2,k=3.9");
+  const auto geometries = parse_geometry_grid("in=15,45,75;out=-83:83.5:0.5");
+  EstimatorOptions o;
+  o.rel_se = 1e-3;
+  for (auto _ : state) {
+    const auto p = twin.predict_many(geometries, o, static_cast<unsigned>(state.range(0)));
+    benchmark::DoNotOptimize(p.data());
+  }
+  state.SetLabel(std::to_string(geometries.size()) + " geometries");
+}
+BENCHMARK(BM_TwinScan1000)->Arg(2)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
+
+}  // namespace
+}  // namespace gonio::twin

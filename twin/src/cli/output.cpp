@@ -1,0 +1,77 @@
+#include "cli/output.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+#include <fmt/ostream.h>
+
+namespace gonio::twin::cli {
+
+int& exit_code() {
+  static int code = 0;
+  return code;
+}
+
+double channel_mean(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return v.empty() ? 0 : s / static_cast<double>(v.size());
+}
+
+nlohmann::json prediction_json(const Prediction& p) {
+  nlohmann::json diag = {{"mean_theta_i", p.diagnostics.mean_theta_i},
+                         {"mean_theta_r", p.diagnostics.mean_theta_r},
+                         {"converged", p.diagnostics.converged}};
+  // NaN is not JSON: the baseline estimator cannot tell the seen fraction.
+  if (std::isnan(p.diagnostics.seen_fraction))
+    diag["seen_fraction"] = nullptr;
+  else
+    diag["seen_fraction"] = p.diagnostics.seen_fraction;
+  return {{"geometry", p.geometry},
+          {"wavelengths_nm", p.wavelengths.values()},
+          {"radiance_factor", p.beta},
+          {"std_error", p.std_error},
+          {"samples", p.samples},
+          {"seconds", p.seconds},
+          {"diagnostics", diag}};
+}
+
+nlohmann::json predictions_json(const std::vector<Prediction>& ps) {
+  auto arr = nlohmann::json::array();
+  for (const auto& p : ps) arr.push_back(prediction_json(p));
+  return arr;
+}
+
+void write_predictions_csv(std::ostream& out, const std::vector<Prediction>& ps) {
+  out << "theta_i,phi_i,theta_r,phi_r,wavelength_nm,radiance_factor,std_error\n";
+  for (const auto& p : ps)
+    for (std::size_t c = 0; c < p.beta.size(); ++c)
+      fmt::print(out, "{},{},{},{},{},{:.9g},{:.3g}\n", p.geometry.theta_i, p.geometry.phi_i,
+                 p.geometry.theta_r, p.geometry.phi_r, p.wavelengths[c], p.beta[c],
+                 p.std_error[c]);
+}
+
+void write_predictions_table(std::ostream& out, const std::vector<Prediction>& ps) {
+  fmt::print(out, "{:>16}  {:>12}  {:>10}  {:>7}  {:>6}  {:>10}  {:>8}\n", "geometry",
+             "β (mean λ)", "s.e.", "rel", "seen", "samples", "ms");
+  for (const auto& p : ps) {
+    const double b = channel_mean(p.beta);
+    // Channels share their paths, so their errors are correlated: the mean of the
+    // per-channel errors bounds the error of the channel mean.
+    const double se = channel_mean(p.std_error);
+    const auto seen = std::isnan(p.diagnostics.seen_fraction)
+                          ? std::string("-")
+                          : fmt::format("{:.1f}%", 100 * p.diagnostics.seen_fraction);
+    fmt::print(out, "{:>16}  {:>12.6g}  {:>10.3g}  {:>6.3f}%  {:>6}  {:>10}  {:>8.2f}{}\n",
+               p.geometry.to_string(), b, se, b != 0 ? 100 * se / std::abs(b) : 0.0, seen,
+               p.samples, 1e3 * p.seconds, p.diagnostics.converged ? "" : "  (budget reached)");
+  }
+  if (ps.size() == 1) {
+    const auto& p = ps.front();
+    fmt::print(out, "\n{:>8}  {:>12}  {:>10}\n", "λ (nm)", "β", "s.e.");
+    for (std::size_t c = 0; c < p.beta.size(); ++c)
+      fmt::print(out, "{:>8g}  {:>12.6g}  {:>10.3g}\n", p.wavelengths[c], p.beta[c], p.std_error[c]);
+  }
+}
+
+}  // namespace gonio::twin::cli
