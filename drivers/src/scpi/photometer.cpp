@@ -210,9 +210,9 @@ std::unique_ptr<Photometer> make_photometer(std::string_view transport_type,
                                             const nlohmann::json& config) {
   json_util::ObjectReader r(config, "photometer");
   auto pc = PhotometerConfig::read(r);
-  auto t = open_transport(transport_type, r);
+  auto open = read_transport(transport_type, r);
   r.finish();
-  return make_photometer(std::move(t), std::move(pc));
+  return make_photometer(open(), std::move(pc));
 }
 
 }  // namespace gonio::drivers::scpi

@@ -1,4 +1,4 @@
-// open_transport: the transport factory used by the registry and gonio-probe.
+// read_transport: the transport factory used by the SCPI photometer registry entries.
 #include <fmt/format.h>
 
 #include "gonio/drivers/serial.hpp"
@@ -9,9 +9,9 @@
 
 namespace gonio::drivers {
 
-TransportPtr open_transport(std::string_view type, json_util::ObjectReader& r) {
-  if (type == "serial") return open_serial(SerialConfig::read(r));
-  if (type == "tcp") return open_tcp(TcpConfig::read(r));
+std::function<TransportPtr()> read_transport(std::string_view type, json_util::ObjectReader& r) {
+  if (type == "serial") return [c = SerialConfig::read(r)] { return open_serial(c); };
+  if (type == "tcp") return [c = TcpConfig::read(r)] { return open_tcp(c); };
   if (type == "usbtmc") {
     usbtmc::DeviceSelector sel;
     sel = usbtmc::DeviceSelector::parse(r.required<std::string>("usb"));
@@ -20,7 +20,9 @@ TransportPtr open_transport(std::string_view type, json_util::ObjectReader& r) {
     if (max < 4 || max > (1 << 20))
       throw Error::out_of_range(r.path("max_transfer"), static_cast<double>(max), 4, 1 << 20, " bytes");
     opt.max_transfer = static_cast<std::uint32_t>(max);
-    return std::make_unique<usbtmc::UsbtmcTransport>(usbtmc::open_libusb(sel), opt);
+    return [sel, opt]() -> TransportPtr {
+      return std::make_unique<usbtmc::UsbtmcTransport>(usbtmc::open_libusb(sel), opt);
+    };
   }
   throw Error::invalid("transport", fmt::format("'{}' is not a transport (allowed: serial, tcp, usbtmc)", type));
 }

@@ -12,6 +12,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -59,8 +60,9 @@ class Transport {
 
 using TransportPtr = std::unique_ptr<Transport>;
 
-// Builds a transport of `type` ("serial", "tcp", "usbtmc") from the keys it owns in `r`
-// (see serial.hpp, transport_tcp.hpp, usbtmc.hpp); the caller calls r.finish().
-TransportPtr open_transport(std::string_view type, json_util::ObjectReader& r);
+// Reads the keys a transport of `type` ("serial", "tcp", "usbtmc") owns in `r` (see
+// serial.hpp, transport_tcp.hpp, usbtmc.hpp) and returns what opens it, so that the caller
+// can reject unknown keys (r.finish()) before any device is touched.
+std::function<TransportPtr()> read_transport(std::string_view type, json_util::ObjectReader& r);
 
 }  // namespace gonio::drivers
