@@ -1,8 +1,8 @@
 // Rough conductor shared by `conductor` (GGX) and `beckmann`.
 #pragma once
 
-#include "bsdf/microfacet.hpp"
-#include "bsdf/model.hpp"
+#include "microfacet.hpp"
+#include "model.hpp"
 
 namespace gonio::twin::bsdf {
 

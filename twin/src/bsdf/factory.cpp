@@ -12,6 +12,7 @@
 #include "bsdf/model.hpp"
 #include "bsdf/spec.hpp"
 #include "gonio/proto/error.hpp"
+#include "gonio/proto/json_util.hpp"
 
 namespace gonio::twin {
 namespace bsdf {
@@ -40,7 +41,13 @@ void check_range(const ParamInfo& p, double v, const std::string& field, double 
 }
 
 BsdfPtr build_lobe(const LobeSpec& lobe, const WavelengthGrid& grid) {
-  if (!lobe.file.empty()) return load_bsdf_file(lobe.file, grid);
+  if (!lobe.file.empty()) {
+    try {
+      return load_bsdf_file(lobe.file, grid);
+    } catch (const Error& e) {
+      throw json_util::prefixed(e, "bsdf");  // "path" -> "bsdf.path"
+    }
+  }
   const ModelInfo* model = find_model(lobe.name);
   if (model == nullptr)
     throw Error::invalid("bsdf", fmt::format("unknown lobe '{}' (known: {})", lobe.name, known_models()));
