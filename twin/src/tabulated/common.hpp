@@ -30,6 +30,12 @@ inline double azimuth_deg(const Vec3& w) noexcept {
   return a >= 360 ? 0 : a;
 }
 
+// Azimuth of an incidence direction: on the z axis it is 180°, the limit along the plane of
+// measurement (wi = (−sin θ, 0, cos θ)), so that θi → 0 is continuous for the instrument.
+inline double incidence_azimuth_deg(const Vec3& w) noexcept {
+  return w.x == 0 && w.y == 0 ? 180.0 : azimuth_deg(w);
+}
+
 inline double polar_deg(const Vec3& w) noexcept { return std::acos(clamp_unit(w.z)) * kRadToDeg; }
 
 // The frame about the mirror image s of w (w.z >= 0) used by the specular parametrization

@@ -195,9 +195,11 @@ std::vector<double> read_block(tab::LineReader& r, const Header& h, std::string_
                              (*h.azimuth)[a], row.size(), n_rad), "ScatterRadial");
         for (std::size_t k = 0; k < n_rad; ++k) {
           const double v = r.number(row[k], "BSDF value");
-          if (v < 0)
-            r.fail(fmt::format("BSDF value {} at azimuth {:g}, radial {:g} is negative", row[k],
-                               (*h.azimuth)[a], (*h.radial)[k]), "BSDF value");
+          if (v < 0 || v > BsdfTable::kMaxF)
+            r.fail(fmt::format("BSDF value {} at azimuth {:g}, radial {:g} is {}", row[k],
+                               (*h.azimuth)[a], (*h.radial)[k],
+                               v < 0 ? "negative" : "beyond 1e12 sr^-1"),
+                   "BSDF value");
           values.push_back(v);
         }
       }
@@ -254,6 +256,13 @@ double hemispherical_integral(const BsdfTable& grey, double theta_i_deg) {
       }
     }
   return sum;
+}
+
+// Radial angle (radians) at which the ray of azimuth `a` about the mirror direction reaches
+// the sample plane: z(r) = cos r·s.z + sin r·(cos a·e1.z + sin a·e2.z) = 0.
+double horizon_radial(const tab::MirrorFrame& f, double a) {
+  const double A = f.s.z, B = std::cos(a) * f.e1.z + std::sin(a) * f.e2.z;
+  return std::atan2(B, A) + kPi / 2;
 }
 
 }  // namespace
@@ -396,9 +405,11 @@ void write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
           if (native) {
             f = t.at(i, 0, j, a, 0);
           } else {
-            const Vec3 wo = frame.direction(std::cos(radial[j] * kDegToRad), azimuth[a] * kDegToRad);
-            f = 0;
-            if (wo.z > 0) t.eval(wi, wo, {&f, 1});
+            // Beyond the horizon the file still needs a value; the one at the horizon along
+            // the same azimuth keeps interpolation near grazing angles unbiased.
+            const double az = azimuth[a] * kDegToRad;
+            const double r = std::min(radial[j] * kDegToRad, horizon_radial(frame, az) - 1e-6);
+            t.eval(wi, frame.direction(std::cos(r), az), {&f, 1});
           }
           os << (j ? "\t" : "") << fmt::format("{}", f);
         }

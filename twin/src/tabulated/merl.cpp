@@ -109,9 +109,13 @@ TabulatedParts read_merl(std::istream& in, std::string_view source) {
         }
       }
   TabulatedParts parts;
-  parts.brdf = BsdfTable(TableParam::half_difference, std::move(axes),
-                         {kRgbWavelengthsNm.begin(), kRgbWavelengthsNm.end()}, std::move(values),
-                         {false, true});
+  try {
+    parts.brdf = BsdfTable(TableParam::half_difference, std::move(axes),
+                           {kRgbWavelengthsNm.begin(), kRgbWavelengthsNm.end()}, std::move(values),
+                           {false, true});
+  } catch (const Error& e) {  // e.g. a value beyond BsdfTable::kMaxF
+    fail(source, 12, e.what());
+  }
   return parts;
 }
 

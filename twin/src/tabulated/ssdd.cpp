@@ -136,6 +136,8 @@ void read_meta_entry(tab::LineReader& r, Meta& m, std::string_view line,
     else if (t[1] == "specular_coordinate_system") m.param = TableParam::specular;
     else if (t[1] == "half_difference_coordinate_system") m.param = TableParam::half_difference;
     else r.unsupported(fmt::format("PARAM_TYPE '{}' is not supported", t[1]), key);
+    if (m.type == DataType::btdf && m.param == TableParam::half_difference)
+      r.unsupported("a btdf in half_difference_coordinate_system is not supported", key);
   } else if (key == "REDUCTION_TYPE") {
     if (!bsdf) r.fail("REDUCTION_TYPE is only for brdf and btdf blocks", key);
     if (t.size() < 2 || t.size() > 3) r.fail("REDUCTION_TYPE takes one or two values", key);
@@ -209,10 +211,11 @@ std::vector<double> read_data(tab::LineReader& r, const Meta& m, bool binary, st
         const std::uint32_t bits = std::uint32_t{b[0]} | std::uint32_t{b[1]} << 8 |
                                    std::uint32_t{b[2]} << 16 | std::uint32_t{b[3]} << 24;
         const double x = std::bit_cast<float>(bits);
-        if (!std::isfinite(x) || x < 0)
+        if (!std::isfinite(x) || x < 0 || x > (specular ? 1.0 : BsdfTable::kMaxF))
           throw Error(Errc::parse_error,
-                      fmt::format("{}:{}: binary value {} of the block is {} (must be finite "
-                                  "and >= 0)", r.source(), data_line, done + i, x),
+                      fmt::format("{}:{}: binary value {} of the block is {} (must be finite, "
+                                  ">= 0 and <= {:g})", r.source(), data_line, done + i, x,
+                                  specular ? 1.0 : BsdfTable::kMaxF),
                       "DATA");
         v.push_back(x);
       }
@@ -231,6 +234,7 @@ std::vector<double> read_data(tab::LineReader& r, const Meta& m, bool binary, st
     for (const auto tok : t) {
       const double x = r.number(tok, "value");
       if (x < 0) r.fail(fmt::format("value {} is negative", tok), "value");
+      if (x > BsdfTable::kMaxF) r.fail(fmt::format("value {} is beyond 1e12 sr^-1", tok), "value");
       if (specular && x > 1) r.fail(fmt::format("specular value {} exceeds 1", tok), "value");
       v.push_back(x);
     }
@@ -250,8 +254,6 @@ void finish_block(tab::LineReader& r, Meta& m, std::string_view mode, TabulatedP
     if (!m.param) r.fail("brdf and btdf blocks need PARAM_TYPE", "PARAM_TYPE");
     if (!m.p[2]) r.fail("the block lacks PARAM2_LIST", "PARAM2_LIST");
     if (!m.p[3]) r.fail("the block lacks PARAM3_LIST", "PARAM3_LIST");
-    if (m.type == DataType::btdf && *m.param == TableParam::half_difference)
-      r.unsupported("a btdf in half_difference_coordinate_system is not supported", "PARAM_TYPE");
     if (m.p[4]) {
       if (m.p[4]->size() != m.p[0]->size())
         r.fail(fmt::format("PARAM4_LIST has {} offsets for {} incoming polar angles",

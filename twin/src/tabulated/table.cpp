@@ -217,7 +217,7 @@ BsdfTable::BsdfTable(TableParam param, Axes axes, std::vector<double> wavelength
   if (values_.size() != total)
     throw Error::invalid("table.values", fmt::format("has {} entries, the axes need {}",
                                                      values_.size(), total));
-  check_values(values_, "table.values", 1e12);
+  check_values(values_, "table.values", kMaxF);
 }
 
 const std::vector<double>& BsdfTable::axis(int k) const {
@@ -249,7 +249,7 @@ std::array<double, 4> BsdfTable::coords(const Vec3& wi, const Vec3& wo) const no
   std::array<double, 4> p{};
   switch (param_) {
     case TableParam::spherical: {
-      const double phi_i = tab::azimuth_deg(wi);
+      const double phi_i = tab::incidence_azimuth_deg(wi);
       p[0] = tab::polar_deg(wi);
       p[2] = tab::polar_deg(wo);
       const double phi_o = tab::azimuth_deg(wo);
@@ -263,7 +263,7 @@ std::array<double, 4> BsdfTable::coords(const Vec3& wi, const Vec3& wo) const no
     }
     case TableParam::specular: {
       p[0] = tab::polar_deg(wi);
-      if (!isotropic()) p[1] = tab::azimuth_deg(wi);
+      if (!isotropic()) p[1] = tab::incidence_azimuth_deg(wi);
       const auto frame = tab::MirrorFrame::of(wi);
       double a = 0;
       frame.angles(wo, p[2], a);
@@ -322,7 +322,7 @@ BsdfTable BsdfTable::weighted(std::span<const double> weights) const {
   BsdfTable t = *this;
   t.values_ = weigh_channels(values_, channels(), weights, "weights");
   t.nm_.clear();
-  check_values(t.values_, "table.values", 1e12);
+  check_values(t.values_, "table.values", kMaxF);
   return t;
 }
 

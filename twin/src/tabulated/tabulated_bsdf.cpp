@@ -166,10 +166,12 @@ BsdfTable tabulate(const Bsdf& bsdf, const AngularGrid& g, bool transmission) {
     for (std::size_t i2 = 0; i2 < g.theta_o.size(); ++i2)
       for (std::size_t i1 = 0; i1 < n1; ++i1)
         for (std::size_t i0 = 0; i0 < g.theta_i.size(); ++i0) {
-          const double phi_i = iso ? 0.0 : g.phi_i[i1];
+          // Isotropic: wi in the plane of measurement (azimuth 180°, the convention at
+          // normal incidence too) and φo relative to it; anisotropic: absolute azimuths.
+          const double phi_i = iso ? 180.0 : g.phi_i[i1];
           const Vec3 wi = spherical(g.theta_i[i0] * kDegToRad, phi_i * kDegToRad);
-          // Isotropic: φo relative to φi = 0, i.e. absolute; anisotropic: absolute too.
-          Vec3 wo = spherical(g.theta_o[i2] * kDegToRad, g.phi_o[i3] * kDegToRad);
+          const double phi_o = iso ? phi_i + g.phi_o[i3] : g.phi_o[i3];
+          Vec3 wo = spherical(g.theta_o[i2] * kDegToRad, phi_o * kDegToRad);
           if (transmission) wo = tab::flip_z(wo);
           bsdf.eval(wi, wo, f);
           for (std::size_t c = 0; c < ch; ++c) {
@@ -202,7 +204,7 @@ TabulatedParts tabulate_parts(const Bsdf& bsdf, const AngularGrid& g, bool refle
       for (std::size_t i0 = 0; i0 < g.theta_i.size(); ++i0) {
         // The receiver at the mirror (and straight-through) position of an incidence
         // θi, φi: wo at θi, azimuth φi + 180°.
-        const double phi_i = iso ? 0.0 : g.phi_i[i1];
+        const double phi_i = iso ? 180.0 : g.phi_i[i1];
         const Vec3 wo = spherical(g.theta_i[i0] * kDegToRad, (phi_i + 180.0) * kDegToRad);
         bsdf.delta_lobes(wo, lobes);
         for (const auto& lobe : lobes) {

@@ -12,10 +12,12 @@
 //                    Representation")
 //
 // Frame (DESIGN §2): normal +z, wi toward the source, wo toward the receiver, both pointing
-// away from the surface. An empty p1 makes the table isotropic: wi is taken at azimuth 0 and
-// p3 is relative to it, so p3 = 180° is the forward (specular) side of the plane of incidence
-// and p3 = 0° the backward side. For the instrument's in-plane geometry (wi = (−sin θi, 0,
-// cos θi), wr = (sin θr, 0, cos θr)) that is φo = 180° for θr > 0 and φo = 0° for θr < 0.
+// away from the surface. An empty p1 makes the table isotropic and p3 the azimuth of wo
+// relative to that of wi (φo − φi), so p3 = 180° is the forward (specular) side of the plane
+// of incidence and p3 = 0° the backward side. For the instrument's in-plane geometry
+// (wi = (−sin θi, 0, cos θi), wr = (sin θr, 0, cos θr)) that is φo = 180° for θr > 0 and
+// φo = 0° for θr < 0. At normal incidence the azimuth of wi is taken as 180°, the limit along
+// that plane.
 // In the specular parametrization azimuth 0 points from the specular direction toward the
 // normal and grows counter-clockwise seen from above (+z), as in the Zemax/Radiant IS-SA
 // format. A BTDF describes wo in its mirror image through the sample plane (θo measured from
@@ -67,6 +69,7 @@ class BsdfTable {
   // Upper bound on nodes × channels, so that no file can make us allocate without limit.
   static constexpr std::size_t kMaxValues = std::size_t{1} << 26;
   static constexpr std::size_t kMaxNodes = 100000;  // per axis
+  static constexpr double kMaxF = 1e12;             // sr⁻¹, far above any real peak
 
   struct Axes {
     std::vector<double> p0, p1, p2, p3;  // degrees; p1 empty = isotropic
