@@ -172,17 +172,14 @@ struct ModbusSim::Impl {
   }
 
   void sync(Unit& u) {
-    const auto& o = cfg.map.output;
-    std::uint16_t out = 0;
-    const auto set = [&](int b, bool on) {
-      if (b >= 0 && on) out = static_cast<std::uint16_t>(out | (1u << b));
-    };
-    set(o.ready, u.axis.ready());
-    set(o.alarm, u.axis.alarm() != 0);
-    set(o.busy, u.axis.busy());
-    set(o.move, u.axis.moving());
-    set(o.in_position, u.axis.in_position());
-    set(o.home_end, u.axis.home_end());
+    modbus::StatusBits st;
+    st.ready = u.axis.ready();
+    st.alarm = u.axis.alarm() != 0;
+    st.busy = u.axis.busy();
+    st.moving = u.axis.moving();
+    st.in_position = u.axis.in_position();
+    st.home_end = u.axis.home_end();
+    const std::uint16_t out = modbus::encode_status(st, cfg.map.output);
     u.mapping->tab_registers[cfg.map.output_status] = out;
     put32(u, cfg.map.alarm_code, u.axis.alarm());
     put32(u, cfg.map.feedback_position, static_cast<std::uint32_t>(u.axis.feedback()));

@@ -97,6 +97,11 @@ std::uint64_t ModbusLink::connects() const {
   return connects_;
 }
 
+std::uint64_t ModbusLink::connect_attempts() const {
+  std::lock_guard lock(mutex_);
+  return attempts_;
+}
+
 void ModbusLink::disconnect_locked() {
   if (!connected_) return;
   modbus_close(ctx_);
@@ -109,8 +114,9 @@ void ModbusLink::ensure_connected(Clock::time_point deadline) {
     if (next_attempt_ > now) {
       if (next_attempt_ >= deadline)
         throw Error(Errc::disconnected,
-                    fmt::format("{}: not connected ({}); next attempt in {} ms, after the deadline",
-                                describe(), last_connect_error_,
+                    fmt::format("{}: cannot connect: {} ({} attempts; the next, in {} ms, "
+                                "would be after the deadline)",
+                                describe(), last_connect_error_, attempts_,
                                 duration_cast<milliseconds>(next_attempt_ - now).count()),
                     config_.name);
       std::this_thread::sleep_until(next_attempt_);
@@ -118,6 +124,7 @@ void ModbusLink::ensure_connected(Clock::time_point deadline) {
     // A TCP connect is bounded by the response timeout in libmodbus.
     set_timeout(ctx_, std::min(timing_.response_timeout, std::max(left(deadline), milliseconds(1))),
                 true);
+    ++attempts_;
     const int rc = modbus_connect(ctx_);
     set_timeout(ctx_, timing_.response_timeout, true);
     if (rc == 0) {

@@ -41,14 +41,13 @@ using modbus::ModbusLink;
 using modbus::RegisterMap;
 
 struct Raw {
-  std::uint16_t output = 0;
+  modbus::StatusBits flags;
   std::uint32_t alarm = 0;
   std::int32_t feedback = 0;
   std::int32_t command = 0;
 };
 
-bool bit(std::uint16_t word, int b) { return b >= 0 && ((word >> b) & 1u) != 0; }
-std::uint16_t mask(int b) { return static_cast<std::uint16_t>(1u << b); }
+std::uint16_t mask(int b) { return modbus::input_word(b); }
 
 class ModbusMotion final : public MotionController {
  public:
@@ -80,14 +79,7 @@ class ModbusMotion final : public MotionController {
     guard_.check_limits(axis, target_deg);
     const std::int32_t target = a.scale.to_steps(target_deg, name);
 
-    if (guard_.min_separation_deg() > 0 && (axis == Axis::incidence || axis == Axis::receive)) {
-      const Axis other = axis == Axis::incidence ? Axis::receive : Axis::incidence;
-      if (has_axis(other)) {
-        const double from = known_position(axis, deadline);
-        const double other_deg = known_position(other, deadline);
-        guard_.check_move(axis, from, target_deg, other_deg);
-      }
-    }
+    check_arms(axis, target_deg, deadline);
 
     const auto generation = stop_generation_.load();
     check_ready(st, name, poll(st, deadline));
@@ -157,13 +149,14 @@ class ModbusMotion final : public MotionController {
     const auto deadline = Clock::now() + timeout;
     auto& st = axis_state(axis);
     const std::string name(axis_name(axis));
+    // Homing ends at device position 0: the guard checks that path like a move's.
+    check_arms(axis, st.cfg->scale.to_degrees(0), deadline);
     const auto generation = stop_generation_.load();
     check_ready(st, name, poll(st, deadline));
     const auto& m = st.cfg->map;
     st.known.reset();
     const bool started = pulse_input(st, name, m.input.zhome, deadline, generation, [&](const Raw& r) {
-      return bit(r.output, m.output.busy) || bit(r.output, m.output.move) ||
-             bit(r.output, m.output.home_end);
+      return r.flags.busy || r.flags.moving || r.flags.home_end;
     });
     if (!started)
       throw Error(Errc::protocol_error,
@@ -180,9 +173,9 @@ class ModbusMotion final : public MotionController {
     const auto& m = st.cfg->map;
     // ALM-RST acts on its rising edge; hold it until the alarm clears (or briefly).
     pulse_input(st, name, m.input.alarm_reset, deadline, std::nullopt,
-                [&](const Raw& r) { return !bit(r.output, m.output.alarm); });
+                [](const Raw& r) { return !r.flags.alarm; });
     const Raw r = poll(st, deadline);
-    if (bit(r.output, m.output.alarm))
+    if (r.flags.alarm)
       throw Error(Errc::device_alarm,
                   fmt::format("{}: alarm 0x{:02X} persists after reset (unit {})", name, r.alarm,
                               st.cfg->unit),
@@ -214,7 +207,7 @@ class ModbusMotion final : public MotionController {
         attempt([&] {
           while (true) {
             const Raw r = poll(st, deadline);
-            if (!bit(r.output, st.cfg->map.output.move)) break;
+            if (!r.flags.moving) break;
             if (Clock::now() + cfg_.poll_interval >= deadline) break;
             std::this_thread::sleep_for(cfg_.poll_interval);
           }
@@ -243,6 +236,18 @@ class ModbusMotion final : public MotionController {
                   fmt::format("{}: this Modbus controller has no such axis", axis_name(axis)),
                   std::string(axis_name(axis)));
     return st;
+  }
+
+  // The collision guard for a move of `axis` to `target_deg` (arms only; the positions
+  // are the last known ones, read when unknown).
+  void check_arms(Axis axis, double target_deg, Clock::time_point deadline) {
+    if (guard_.min_separation_deg() <= 0 || (axis != Axis::incidence && axis != Axis::receive))
+      return;
+    const Axis other = axis == Axis::incidence ? Axis::receive : Axis::incidence;
+    if (!state_[static_cast<std::size_t>(other)].cfg) return;
+    const double from = known_position(axis, deadline);
+    const double other_deg = known_position(other, deadline);
+    guard_.check_move(axis, from, target_deg, other_deg);
   }
 
   double known_position(Axis axis, Clock::time_point deadline) {
@@ -281,7 +286,7 @@ class ModbusMotion final : public MotionController {
       i = j;
     }
     Raw raw;
-    raw.output = regs[0];
+    raw.flags = modbus::decode_status(regs[0], m.output);
     raw.alarm = modbus::decode_u32(regs[1], regs[2], m.word_order);
     raw.feedback = modbus::decode_i32(regs[3], regs[4], m.word_order);
     raw.command = modbus::decode_i32(regs[5], regs[6], m.word_order);
@@ -289,15 +294,14 @@ class ModbusMotion final : public MotionController {
   }
 
   AxisStatus to_status(AxisState& st, const Raw& r) {
-    const auto& o = st.cfg->map.output;
     AxisStatus s;
-    s.ready = bit(r.output, o.ready);
-    s.busy = bit(r.output, o.busy);
-    s.moving = bit(r.output, o.move);
-    s.in_position = bit(r.output, o.in_position);
-    s.alarm = bit(r.output, o.alarm);
+    s.ready = r.flags.ready;
+    s.busy = r.flags.busy;
+    s.moving = r.flags.moving;
+    s.in_position = r.flags.in_position;
+    s.alarm = r.flags.alarm;
     s.alarm_code = r.alarm;
-    s.home_end = bit(r.output, o.home_end);
+    s.home_end = r.flags.home_end;
     s.position_deg = st.cfg->scale.to_degrees(r.feedback);
     s.command_deg = st.cfg->scale.to_degrees(r.command);
     if (!s.moving) st.known = s.position_deg;
@@ -305,16 +309,15 @@ class ModbusMotion final : public MotionController {
   }
 
   void check_ready(AxisState& st, const std::string& name, const Raw& r) {
-    const auto& o = st.cfg->map.output;
-    if (bit(r.output, o.alarm))
+    if (r.flags.alarm)
       throw Error(Errc::device_alarm,
                   fmt::format("{}: alarm 0x{:02X} present on unit {}; reset it first", name,
                               r.alarm, st.cfg->unit),
                   name);
-    if (!bit(r.output, o.ready))
+    if (!r.flags.ready)
       throw Error(Errc::busy,
                   fmt::format("{}: unit {} is not ready ({})", name, st.cfg->unit,
-                              bit(r.output, o.move) ? "moving" : "stopped, de-energised or busy"),
+                              r.flags.moving ? "moving" : "stopped, de-energised or busy"),
                   name);
   }
 
@@ -384,22 +387,22 @@ class ModbusMotion final : public MotionController {
                     fmt::format("{}: {} interrupted by stop at {:g}°", name, what,
                                 a.scale.to_degrees(r.feedback)),
                     name);
-      if (bit(r.output, o.alarm))
+      if (r.flags.alarm)
         throw Error(Errc::device_alarm,
                     fmt::format("{}: alarm 0x{:02X} during {} (unit {}, at {:g}°)", name, r.alarm,
                                 what, a.unit, a.scale.to_degrees(r.feedback)),
                     name);
-      const bool moving = bit(r.output, o.move) || bit(r.output, o.busy);
+      const bool moving = r.flags.moving || r.flags.busy;
       const double lag = std::abs(static_cast<double>(r.feedback) - static_cast<double>(r.command));
       if (moving && lag > following_steps) {
         stop_quietly(st);
         throw following_error(st, name, what, r);
       }
       const bool profile_done =
-          !moving && (homing ? (o.home_end < 0 || bit(r.output, o.home_end)) : r.command == *target);
+          !moving && (homing ? (o.home_end < 0 || r.flags.home_end) : r.command == *target);
       if (profile_done) {
         const double miss = target ? std::abs(static_cast<double>(r.feedback) - *target) : lag;
-        if (bit(r.output, o.in_position) && miss <= band_steps && lag <= band_steps) break;
+        if (r.flags.in_position && miss <= band_steps && lag <= band_steps) break;
         if (profile_done_at == never) profile_done_at = Clock::now();
         if (Clock::now() - profile_done_at >= cfg_.settle_timeout) {
           if (lag > following_steps || miss > band_steps) throw following_error(st, name, what, r);

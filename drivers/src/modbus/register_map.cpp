@@ -219,6 +219,38 @@ void RegisterMap::validate(const std::string& context) const {
   check_distinct_bits(join_field(context, "output_bits"), kOutputBits, output);
 }
 
+// --- status word ---------------------------------------------------------------------------
+
+StatusBits decode_status(std::uint16_t word, const RegisterMap::OutputBits& bits) noexcept {
+  const auto on = [word](int b) { return b >= 0 && b <= 15 && ((word >> b) & 1u) != 0; };
+  StatusBits s;
+  s.ready = on(bits.ready);
+  s.alarm = on(bits.alarm);
+  s.busy = on(bits.busy);
+  s.moving = on(bits.move);
+  s.in_position = on(bits.in_position);
+  s.home_end = on(bits.home_end);
+  return s;
+}
+
+std::uint16_t encode_status(const StatusBits& s, const RegisterMap::OutputBits& bits) noexcept {
+  std::uint16_t w = 0;
+  const auto set = [&w](int b, bool v) {
+    if (v && b >= 0 && b <= 15) w = static_cast<std::uint16_t>(w | (1u << b));
+  };
+  set(bits.ready, s.ready);
+  set(bits.alarm, s.alarm);
+  set(bits.busy, s.busy);
+  set(bits.move, s.moving);
+  set(bits.in_position, s.in_position);
+  set(bits.home_end, s.home_end);
+  return w;
+}
+
+std::uint16_t input_word(int bit) noexcept {
+  return bit >= 0 && bit <= 15 ? static_cast<std::uint16_t>(1u << bit) : 0;
+}
+
 // --- encoding ----------------------------------------------------------------------------
 
 std::array<std::uint16_t, 2> encode_u32(std::uint32_t v, WordOrder order) noexcept {

@@ -133,11 +133,20 @@ std::string hint(Errc c) {
   }
 }
 
-// Driver messages start with the internal axis name; the probe speaks of the unit.
-std::string reword(const std::string& message, const std::string& who) {
-  const std::string prefix = std::string(axis_name(kAxis)) + ": ";
-  if (message.rfind(prefix, 0) == 0) return who + ": " + message.substr(prefix.size());
-  return message;
+// Driver messages start with the internal axis name or the link; the probe speaks of the
+// unit on its link.
+std::string reword(const std::string& message, const std::string& who, const std::string& link) {
+  for (const std::string& prefix : {std::string(axis_name(kAxis)) + ": ", link + ": ",
+                                    link + " unit "}) {
+    if (message.rfind(prefix, 0) != 0) continue;
+    std::string rest = message.substr(prefix.size());
+    if (prefix.back() == ' ') {  // "<link> unit N: ..."
+      const auto colon = rest.find(": ");
+      if (colon != std::string::npos) rest = rest.substr(colon + 2);
+    }
+    return who + ": " + rest;
+  }
+  return who + ": " + message;
 }
 
 }  // namespace
@@ -174,7 +183,7 @@ int run_modbus_axis(const ModbusAxisOptions& o, std::ostream& out, std::ostream&
       if (s.alarm) code = 6;
     }
   } catch (const Error& e) {
-    err << "error: " << reword(e.what(), who) << '\n';
+    err << "error: " << reword(e.what(), who, cfg.links.front().describe()) << '\n';
     if (const auto h = hint(e.code()); !h.empty()) err << "hint: " << h << '\n';
     code = exit_code(e.code());
   } catch (const std::exception& e) {

@@ -76,9 +76,11 @@ class ModbusLink {
 
   // Drops the connection (the next transaction re-opens it).
   void close();
-  // Requests that got an answer / connection attempts, for logs and tests.
+  // Requests that got an answer, successful connections and all connection attempts,
+  // for logs and tests.
   std::uint64_t transactions() const;
   std::uint64_t connects() const;
+  std::uint64_t connect_attempts() const;
 
  private:
   void ensure_connected(Clock::time_point deadline);  // mutex held
@@ -97,6 +99,7 @@ class ModbusLink {
   std::string last_connect_error_;
   std::uint64_t transactions_ = 0;
   std::uint64_t connects_ = 0;
+  std::uint64_t attempts_ = 0;
 };
 
 }  // namespace gonio::drivers::modbus

@@ -84,6 +84,24 @@ struct RegisterMap {
   void validate(const std::string& context) const;
 };
 
+// --- status word -------------------------------------------------------------------------
+
+// The signals of the driver output status word, as named by the map's output bits.
+struct StatusBits {
+  bool ready = false;
+  bool alarm = false;
+  bool busy = false;
+  bool moving = false;
+  bool in_position = false;
+  bool home_end = false;  // always false when the map has no home-end bit
+  friend bool operator==(const StatusBits&, const StatusBits&) = default;
+};
+
+StatusBits decode_status(std::uint16_t word, const RegisterMap::OutputBits& bits) noexcept;
+std::uint16_t encode_status(const StatusBits& s, const RegisterMap::OutputBits& bits) noexcept;
+// The input command word with one input on (0 for bit < 0).
+std::uint16_t input_word(int bit) noexcept;
+
 // --- value encoding --------------------------------------------------------------------
 
 std::array<std::uint16_t, 2> encode_u32(std::uint32_t v, WordOrder order) noexcept;
