@@ -31,8 +31,11 @@ class RoughConductor final : public Lobe {
     const double common = mf_.D(h) * mf_.G2(wi, wo) / (4.0 * wi.z * wo.z);
     if (!(common > 0)) return;
     const double cos_h = dot(wi, h);
+    // Spectrally flat stretches of η and k (common in specs) reuse the previous channel.
     for (std::size_t c = 0; c < out.size(); ++c)
-      out[c] = common * fresnel_conductor(cos_h, eta_[c], k_[c]);
+      out[c] = c > 0 && eta_[c] == eta_[c - 1] && k_[c] == k_[c - 1]
+                   ? out[c - 1]
+                   : common * fresnel_conductor(cos_h, eta_[c], k_[c]);
   }
 
   std::optional<BsdfSample> sample_wi(const Vec3& wo_in, double, Vec2 u) const override {

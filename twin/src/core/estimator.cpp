@@ -24,18 +24,13 @@ double channel_mean(const std::vector<double>& v) {
   return v.empty() ? 0 : s / static_cast<double>(v.size());
 }
 
-// MIS weights (divided by the pdf) for a candidate drawn by the aperture strategy (first)
-// and by the BSDF strategy (second): the balance heuristic, cut off where one density is
-// under a tenth of the other (Veach 1997, §9.2.4). The cutoff matters: a Lambertian white
-// puts ~1e-3 of its BSDF samples into a 2° aperture, and without it those rare hits would
-// carry a share of the estimate that small runs almost never see.
+// MIS weights divided by the pdf, for a candidate drawn by the aperture strategy and for
+// one drawn by BSDF sampling: the balance heuristic (Veach 1997, §9.2.2). (The power
+// heuristic measured worse here: the two densities overlap over most of a narrow lobe.)
 struct MisWeights {
   double aperture = 0, bsdf = 0;
 };
 MisWeights mis_weights(double pdf_aperture, double pdf_bsdf) {
-  constexpr double kCutoff = 0.1;
-  if (pdf_bsdf < kCutoff * pdf_aperture) return {1.0 / pdf_aperture, 0.0};
-  if (pdf_aperture < kCutoff * pdf_bsdf) return {0.0, 1.0 / pdf_bsdf};
   const double w = 1.0 / (pdf_aperture + pdf_bsdf);
   return {w, w};
 }
@@ -73,7 +68,37 @@ FluxEstimator::FluxEstimator(const MeasurementSetup& setup, const Bsdf& sample,
     : setup_(setup), sample_(sample), reference_(reference), kind_(kind), seed_(seed),
       replicates_(replicates), channels_(sample.channels()),
       sums_(static_cast<std::size_t>(replicates) * channels_, 0.0),
-      ref_sums_(static_cast<std::size_t>(replicates) * channels_, 0.0) {}
+      ref_sums_(static_cast<std::size_t>(replicates) * channels_, 0.0),
+      sample_narrow_(narrow_at_aperture_scale(setup, sample, false)),
+      reference_narrow_(reference && narrow_at_aperture_scale(setup, *reference, true)) {}
+
+// Whether a BSDF varies on the scale of the source aperture for this geometry, i.e. whether
+// BSDF sampling can beat uniform aperture sampling anywhere in it. Probes the density of
+// BSDF sampling (given the nominal receiver direction) on a 5 × 5 grid of the aperture and
+// at BSDF samples that land in it; a smooth model never reaches half the aperture's own
+// density there. Smooth integrands then keep RQMC's fast convergence with one strategy,
+// and MIS (with its discontinuous acceptance of BSDF samples) is used only where needed.
+bool FluxEstimator::narrow_at_aperture_scale(const MeasurementSetup& s, const Bsdf& bsdf,
+                                             bool reference) {
+  const Vec3 wo = reference ? reference_wo(s.receiver.a) : s.receiver.a;
+  const double area = s.source_aperture.tangent_area();
+  const auto dense = [&](const Vec3& wi) {
+    Vec2 t;
+    if (!tangent_of(s.source, wi, t) || !s.source_aperture.contains_tangent(t)) return false;
+    const double cg = dot(wi, s.source.a);
+    return bsdf.pdf(wo, wi) >= 0.5 / (area * cg * cg * cg);
+  };
+  for (int i = 0; i < 5; ++i)
+    for (int j = 0; j < 5; ++j)
+      if (dense(direction_from_tangent(s.source, aperture_point(s.source_aperture, (i + 0.5) / 5,
+                                                                (j + 0.5) / 5)).w))
+        return true;
+  for (int k = 0; k < 32; ++k) {
+    const auto smp = bsdf.sample_wi(wo, (k + 0.5) / 32, {((k * 5) % 32 + 0.5) / 32, ((k * 13) % 32 + 0.5) / 32});
+    if (smp && dense(smp->wi)) return true;
+  }
+  return false;
+}
 
 void FluxEstimator::run_until(std::uint64_t n) {
   if (n <= n_) return;
@@ -204,15 +229,16 @@ void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
 
     // Strategy 1: uniform over the source aperture.
     {
-      const auto id = direction_from_tangent(S.source, aperture_point(S.source_aperture, u[2], u[3]));
+      const auto id = direction_from_tangent(S.source, aperture_point(S.source_aperture, u[4], u[5]));
       const double pdf1 = 1.0 / (src_area * id.cos_gamma3);
-      const double pdf2 = sample_.pdf(wo, id.w);
-      const double pdf2r = reference_ ? reference_->pdf(wo_ref, id.w) : 0;
-      contribute(id.w, mis_weights(pdf1, pdf2).aperture, mis_weights(pdf1, pdf2r).aperture);
+      const double pdf2 = sample_narrow_ ? sample_.pdf(wo, id.w) : 0;
+      const double pdf2r = reference_narrow_ ? reference_->pdf(wo_ref, id.w) : 0;
+      contribute(id.w, sample_narrow_ ? mis_weights(pdf1, pdf2).aperture : 1.0 / pdf1,
+                 reference_narrow_ ? mis_weights(pdf1, pdf2r).aperture : 1.0 / pdf1);
     }
     // Strategy 2: BSDF importance sampling given wo, kept when it lands in the aperture.
     const auto bsdf_strategy = [&](const Bsdf& bsdf, const Vec3& wo_b, bool for_sample) {
-      const auto s = bsdf.sample_wi(wo_b, u[4], {u[5], u[6]});
+      const auto s = bsdf.sample_wi(wo_b, u[6], {u[2], u[3]});
       if (!s || !(s->pdf > 0)) return;
       Vec2 t;
       if (!tangent_of(S.source, s->wi, t) || !S.source_aperture.contains_tangent(t)) return;
@@ -225,8 +251,8 @@ void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
       else
         contribute(s->wi, 0, w);
     };
-    bsdf_strategy(sample_, wo, true);
-    if (reference_) bsdf_strategy(*reference_, wo_ref, false);
+    if (sample_narrow_) bsdf_strategy(sample_, wo, true);
+    if (reference_narrow_) bsdf_strategy(*reference_, wo_ref, false);
 
     // Ideal specular paths, exactly.
     const auto delta = [&](const Bsdf& bsdf, const Vec3& wo_b, bool for_sample) {

@@ -12,9 +12,9 @@
 // L |cos θo| dA dωo. The spatial integral is done exactly (polygon clipping); the 4-D
 // angular one by Monte Carlo:
 //
-//   rqmc      ωo uniform in Ωr (tangent plane); ωi by two strategies combined with the
-//             balance heuristic (Veach 1997, §9.2): uniform in Ωs, and BSDF importance
-//             sampling given ωo; delta lobes exactly. Points are Owen-scrambled Sobol,
+//   rqmc      ωo uniform in Ωr (tangent plane); ωi uniform in Ωs — and, for BSDFs that
+//             vary on the aperture's scale, also by BSDF importance sampling given ωo,
+//             combined with the balance heuristic (Veach 1997, §9.2); delta lobes exactly. Points are Owen-scrambled Sobol,
 //             one scramble per replicate.
 //   baseline  the founding paper's scheme (eqs. 2–5): a uniform point on the receiver's
 //             pupil and a uniform direction over the detector's (slit's) aperture, weighted
@@ -70,6 +70,7 @@ class FluxEstimator {
 
  private:
   struct Accumulator;
+  static bool narrow_at_aperture_scale(const MeasurementSetup& s, const Bsdf& bsdf, bool reference);
   void run_rqmc(int r, std::uint64_t begin, std::uint64_t end);
   void run_baseline(int r, std::uint64_t begin, std::uint64_t end);
 
@@ -83,6 +84,7 @@ class FluxEstimator {
   std::uint64_t n_ = 0;
   std::vector<double> sums_, ref_sums_;
   // Diagnostics: flux-weighted sums (channel-mean weights).
+  bool sample_narrow_ = false, reference_narrow_ = false;  // use BSDF sampling (MIS)
   double w_sum_ = 0, w_seen_ = 0, w_lit_ = 0, w_theta_i_ = 0, w_theta_r_ = 0;
 };
 

@@ -14,6 +14,7 @@
 // exactly by clipping (ellipses are 64-gons with the ellipse's area).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -84,11 +85,24 @@ inline bool tangent_of(const ArmFrame& f, const Vec3& w, Vec2& out) noexcept {
   return true;
 }
 
-// A convex polygon on the sample plane with a fixed capacity.
+// A convex polygon on the sample plane with a fixed capacity. Vertex storage is left
+// uninitialised and only the first n vertices are ever copied: clipping runs several times
+// per Monte Carlo point, and touching the whole capacity would dominate its cost.
 struct Polygon {
+  struct Point {
+    double x, y;  // no initialisers on purpose (see above)
+  };
   static constexpr std::size_t kMax = 160;
-  std::array<Vec2, kMax> v;
+  Point v[kMax];
   std::size_t n = 0;
+
+  Polygon() noexcept {}  // NOLINT: vertices are written before they are read
+  Polygon(const Polygon& o) noexcept : n(o.n) { std::copy(o.v, o.v + o.n, v); }
+  Polygon& operator=(const Polygon& o) noexcept {
+    n = o.n;
+    std::copy(o.v, o.v + o.n, v);
+    return *this;
+  }
 
   static Polygon rectangle(double half_x, double half_y) noexcept {
     Polygon p;
@@ -100,29 +114,38 @@ struct Polygon {
     return p;
   }
   double area() const noexcept {
+    if (n < 3) return 0;
     double s = 0;
     for (std::size_t i = 0, j = n - 1; i < n; j = i++) s += v[j].x * v[i].y - v[i].x * v[j].y;
-    return n < 3 ? 0 : 0.5 * std::abs(s);
+    return 0.5 * std::abs(s);
   }
 };
 
 // Keeps the part of `poly` where g·x ≤ c (Sutherland–Hodgman against one half-plane).
 inline void clip(Polygon& poly, Vec2 g, double c) noexcept {
   if (poly.n == 0) return;
-  Polygon out;
+  Polygon::Point out[Polygon::kMax];
+  std::size_t m = 0;
+  bool all_inside = true;
   for (std::size_t i = 0; i < poly.n; ++i) {
-    const Vec2 a = poly.v[i];
-    const Vec2 b = poly.v[(i + 1) % poly.n];
+    const auto a = poly.v[i];
+    const auto b = poly.v[i + 1 == poly.n ? 0 : i + 1];
     const double da = g.x * a.x + g.y * a.y - c;
     const double db = g.x * b.x + g.y * b.y - c;
-    if (da <= 0) out.v[out.n++] = a;
+    if (da <= 0) {
+      out[m++] = a;
+    } else {
+      all_inside = false;
+    }
     if ((da < 0 && db > 0) || (da > 0 && db < 0)) {
       const double s = da / (da - db);
-      out.v[out.n++] = {a.x + s * (b.x - a.x), a.y + s * (b.y - a.y)};
+      out[m++] = {a.x + s * (b.x - a.x), a.y + s * (b.y - a.y)};
     }
-    if (out.n + 2 > Polygon::kMax) break;  // cannot happen for convex inputs within capacity
+    if (m + 2 > Polygon::kMax) break;  // cannot happen for convex inputs within capacity
   }
-  poly = out;
+  if (all_inside) return;
+  poly.n = m;
+  std::copy(out, out + m, poly.v);
 }
 
 // The footprint on the sample plane of a cross-section of an arm, for rays along ω.
