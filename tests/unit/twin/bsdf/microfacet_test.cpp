@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <complex>
 
 // Private headers of the bsdf family: the test exercises them directly.
 #include "../../../../twin/src/bsdf/fresnel.hpp"
@@ -139,6 +140,21 @@ TEST(Fresnel, KnownValues) {
   // Grazing incidence reflects everything.
   EXPECT_NEAR(bsdf::fresnel_conductor(0.0, 0.2, 3.9), 1.0, 1e-12);
   EXPECT_NEAR(bsdf::fresnel_dielectric(0.0, 1.5), 1.0, 1e-12);
+}
+
+// The real-arithmetic conductor formula against the Fresnel equations in complex numbers.
+TEST(Fresnel, ConductorMatchesComplexFresnelEquations) {
+  using C = std::complex<double>;
+  test::Rng rng(77);
+  for (int i = 0; i < 2000; ++i) {
+    const double c = rng.uniform(), eta = 1e-3 + 10 * rng.uniform(), k = 20 * rng.uniform();
+    const C n(eta, k);
+    const C ct = std::sqrt(C(1.0) - C(1.0 - c * c) / (n * n));
+    const C rs = (C(c) - n * ct) / (C(c) + n * ct);
+    const C rp = (n * c - ct) / (n * c + ct);
+    const double expected = 0.5 * (std::norm(rs) + std::norm(rp));
+    EXPECT_NEAR(bsdf::fresnel_conductor(c, eta, k), expected, 1e-12) << c << " " << eta << " " << k;
+  }
 }
 
 TEST(Sampling, ErfInvInvertsErf) {
