@@ -507,6 +507,19 @@ struct ModbusSim::Impl {
     }
   }
 
+  // Waits (at most 2 s) until `done` holds under the lock, while the thread serves.
+  template <typename Pred>
+  void await(Pred done) {
+    const auto until = Clock::now() + std::chrono::seconds(2);
+    while (Clock::now() < until && thread.joinable()) {
+      {
+        std::lock_guard lock(mu);
+        if (done()) return;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  }
+
   void wake() {
     const char c = 1;
     [[maybe_unused]] const ssize_t w = ::write(wake_w, &c, 1);
@@ -583,12 +596,15 @@ void ModbusSim::set_mute(bool mute) {
   impl_->mute = mute;
 }
 
+// Both take effect on the serving thread; they return once it has acted (bounded wait),
+// so that a test's next request sees the new state.
 void ModbusSim::drop_connections() {
   {
     std::lock_guard lock(impl_->mu);
     impl_->pending_drop = true;
   }
   impl_->wake();
+  impl_->await([&] { return !impl_->pending_drop; });
 }
 
 void ModbusSim::set_offline(bool offline) {
@@ -597,6 +613,7 @@ void ModbusSim::set_offline(bool offline) {
     impl_->pending_offline = offline;
   }
   impl_->wake();
+  impl_->await([&] { return !impl_->pending_offline.has_value(); });
 }
 
 void ModbusSim::corrupt_next_replies(int count) {

@@ -72,9 +72,26 @@ std::vector<Exchange> load(const std::filesystem::path& p) {
   return out;
 }
 
+// The driver configuration of the capture, pinned here: any change to it changes the
+// traffic (speeds and rates are in the direct-data block).
+json golden_config(const std::string& device) {
+  const auto ax = [](int unit) {
+    return json{{"unit", unit}, {"steps_per_degree", 100}, {"min_deg", -90}, {"max_deg", 90},
+                {"speed_deg_s", 50}, {"accel_deg_s2", 500}, {"in_position_deg", 0.02},
+                {"following_error_deg", 2}};
+  };
+  return json{{"links", {{"main", rtu_link(device)}}},
+              {"response_timeout_ms", 100},
+              {"retries", 1},
+              {"poll_interval_ms", 5},
+              {"settle_timeout_ms", 300},
+              {"min_separation_deg", 10},
+              {"axes", {{"incidence", ax(1)}, {"receive", ax(2)}}}};
+}
+
 // The session: status, two guarded moves, a readback, homing, status.
 void session(const std::string& device) {
-  auto m = gonio::drivers::make_modbus_motion(driver_config(rtu_link(device)));
+  auto m = gonio::drivers::make_modbus_motion(golden_config(device));
   const auto s0 = m->status(Axis::incidence, 2s);
   EXPECT_TRUE(s0.ready);
   EXPECT_DOUBLE_EQ(s0.position_deg, 0);

@@ -47,9 +47,12 @@ TEST_F(MotionRtu, TwoUnitsOnOneLine) {
 }
 
 TEST_F(MotionRtu, StopFromAnotherThread) {
+  auto cfg = driver_config(rtu_link(sim_->rtu_path()));
+  cfg["axes"]["receive"]["speed_deg_s"] = 20;  // slow: the stop surely lands mid-move
+  motion_ = gonio::drivers::make_modbus_motion(cfg);
   std::optional<gonio::Error> failure;
   std::thread mover([&] { failure = error_of([&] { motion_->move(Axis::receive, 85, 10s); }); });
-  ASSERT_TRUE(wait_until([&] { return sim_->axis(2).moving && sim_->axis(2).command > 3500; }));
+  ASSERT_TRUE(wait_until([&] { return sim_->axis(2).moving && sim_->axis(2).command > 3100; }));
   motion_->stop(2s);
   mover.join();
   ASSERT_TRUE(failure);

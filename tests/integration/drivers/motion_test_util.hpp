@@ -36,8 +36,8 @@ inline json axis(int unit, json extra = json::object()) {
          {"steps_per_degree", kStepsPerDegree},
          {"min_deg", -90},
          {"max_deg", 90},
-         {"speed_deg_s", 50},
-         {"accel_deg_s2", 500},
+         {"speed_deg_s", 200},
+         {"accel_deg_s2", 4000},
          {"in_position_deg", 0.02},
          {"following_error_deg", 2}};
   a.update(extra);
