@@ -26,7 +26,7 @@ struct ModelOptions {
   std::string estimator = "rqmc";
   double rel_se = 1e-3;
   std::uint64_t max_samples = 1ull << 22;
-  int replicates = 64;
+  int replicates = 32;
   std::uint64_t seed = 1;
   unsigned threads = 0;
   // Calibration overrides of the profile.

@@ -183,7 +183,7 @@ Prediction Twin::predict(const Geometry& g, const EstimatorOptions& options) con
   }
 
   const std::uint64_t paths_per_point = static_cast<std::uint64_t>(R) * (fixed ? 1 : 2);
-  std::uint64_t n = 16;
+  std::uint64_t n = 64;
   std::vector<double> num(static_cast<std::size_t>(R)), den(static_cast<std::size_t>(R));
   for (;;) {
     est.run_until(n);

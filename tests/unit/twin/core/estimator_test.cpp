@@ -161,7 +161,7 @@ TEST(Twin, BaselineAgreesWithRqmc) {
 
 TEST(Twin, StandardErrorIsHonest) {
   // Over many seeds the estimate falls within 3 s.e. of the converged value in ≥ 99 % of
-  // trials (with R = 64 replicates the jackknife t has 63 d.o.f.: P(|t| > 3) ≈ 0.4 %).
+  // trials (with R = 32 replicates the jackknife t has 31 d.o.f.: P(|t| > 3) ≈ 0.5 %).
   const auto twin = make_twin(std::make_shared<TestPhong>(kGrid, 0.5, 5000.0));
   const auto g = Geometry::in_plane(40, 39);
   EstimatorOptions tight;

@@ -27,7 +27,7 @@ struct EstimatorOptions {
   double rel_se = 1e-3;                   // stop when every channel has s.e. ≤ rel_se·β
   double abs_se = 1e-6;                   // ... or s.e. ≤ abs_se (β units), for dark channels
   std::uint64_t max_samples = 1ull << 22; // budget per geometry, sample + reference paths
-  int replicates = 64;                    // R independent randomisations
+  int replicates = 32;                    // R independent randomisations
   std::uint64_t seed = 1;
   void validate() const;
 };
