@@ -23,7 +23,7 @@ using test::dir_deg;
 // ∫ D(m) G1(wo) max(0, wo·m) / cos θo dm over the hemisphere of m, by the midpoint rule in
 // (v, φ) with tan θm = α v/(1 − v): the substitution follows the lobe for any α.
 double furnace_in_normal_space(const Microfacet& mf, const Vec3& wo) {
-  const int nv = 4000, nphi = 256;
+  const int nv = 1500, nphi = 96;
   double sum = 0;
   for (int i = 0; i < nv; ++i) {
     const double v = (i + 0.5) / nv;
@@ -41,7 +41,7 @@ double furnace_in_normal_space(const Microfacet& mf, const Vec3& wo) {
 // The same integral over directions wi of the whole sphere, h = (wi + wo)/|wi + wo|,
 // with the Jacobian dωh/dωi = 1/(4 wo·h): a plain grid in (cos θi, φi), for wide lobes.
 double furnace_in_direction_space(const Microfacet& mf, const Vec3& wo) {
-  const int nz = 1000, nphi = 400;
+  const int nz = 600, nphi = 200;
   double sum = 0;
   for (int i = 0; i < nz; ++i) {
     const double z = -1 + 2 * (i + 0.5) / nz;

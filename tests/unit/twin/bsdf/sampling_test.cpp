@@ -60,7 +60,7 @@ TEST_P(SamplingChi2, MatchesPdf) {
     const bool same = c.side == Side::reflection;
     map = test::restricted(map, [wo, same](const Vec3& w) { return (w.z * wo.z > 0) == same; });
   }
-  const int n = 100000;
+  const int n = 60000;
   const auto r = test::chi2_test(*b, wo, map, n, 0x5eed + static_cast<std::uint64_t>(c.theta_o));
   // About 60 cases: a 1e-4 significance level keeps the family-wise false alarm rate
   // under 1 % (Šidák), and the seeds are fixed.
