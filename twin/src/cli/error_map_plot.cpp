@@ -18,13 +18,14 @@ void plot_error_map(const std::string& path, const std::vector<ErrorMapRow>& row
   fig.title = fmt::format("{} — true vs virtually measured", title);
   fig.width = 1000;
   fig.height = 700;
+  fig.panels.reserve(2);  // the references below must survive the second emplace_back
   Panel& beta = fig.panels.emplace_back();
   beta.x = Axis("receiving angle θr", "°");
   beta.y = Axis("radiance factor β").logarithmic(log_y);
   beta.height_ratio = 2;
   Panel& err = fig.panels.emplace_back();
   err.x = Axis("receiving angle θr", "°");
-  err.y = Axis("relative error (virtual − true) / true");
+  err.y = Axis("rel. error");
   err.y_reference_lines = {0};
   err.legend = LegendPlacement::none;
 

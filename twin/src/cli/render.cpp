@@ -46,8 +46,8 @@ void add_render(CLI::App& app) {
       auto opts = *ro;
       opts.seed = model->seed;
       opts.threads = model->threads;
-      opts.left_caption = "true: " + twin.sample().spec();
-      opts.right_caption = fmt::format("measured ({}° / {}° grid)", *theta_step, *phi_step);
+      opts.left_caption = "true BSDF";
+      opts.right_caption = fmt::format("measured, {}°/{}° grid", *theta_step, *phi_step);
       const auto r = render_spheres(twin.sample(), *measured, opts);
       write_png(r.image, *output);
       std::cout << fmt::format("wrote {}\n", *output);
