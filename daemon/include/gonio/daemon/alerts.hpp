@@ -1,0 +1,43 @@
+// AlertService — raises, deduplicates, persists, logs and pushes alerts.
+//
+// The store deduplicates (one open alert per dedup_key); every raise is pushed to the
+// `alerts` topic; a new alert (or one whose severity rose) at or above the webhook's
+// minimum severity is handed to the webhook sender, which POSTs it with retries.
+#pragma once
+
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "gonio/daemon/hub.hpp"
+#include "gonio/daemon/store.hpp"
+
+namespace gonio::daemon {
+
+// Delivers JSON payloads somewhere else (the webhook); implemented with Boost.Beast.
+class AlertSink {
+ public:
+  virtual ~AlertSink() = default;
+  virtual void deliver(const nlohmann::json& payload) = 0;
+  virtual nlohmann::json stats() const = 0;  // {"delivered", "failed", "pending"}
+};
+
+class AlertService {
+ public:
+  AlertService(Store& store, Hub& hub, Severity webhook_min = Severity::warning);
+
+  void set_sink(std::shared_ptr<AlertSink> sink);
+  std::shared_ptr<AlertSink> sink() const;
+
+  Alert raise(const AlertDraft& draft);
+  Alert ack(std::int64_t id, const std::string& actor);
+
+ private:
+  Store& store_;
+  Hub& hub_;
+  Severity webhook_min_;
+  mutable std::mutex mu_;
+  std::shared_ptr<AlertSink> sink_;
+};
+
+}  // namespace gonio::daemon

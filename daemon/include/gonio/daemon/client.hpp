@@ -1,0 +1,75 @@
+// A blocking JSON-RPC client over the NDJSON transports (unix:PATH, tcp://HOST:PORT), for
+// gonioctl and gonio-load. Plain POSIX sockets: a command-line client needs no event loop.
+//
+// Notifications that arrive while waiting for a response are kept, in order, for
+// next_notification().
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace gonio::daemon {
+
+// A JSON-RPC error response.
+class RpcError : public std::runtime_error {
+ public:
+  RpcError(int code, const std::string& message, nlohmann::json data)
+      : std::runtime_error(message), code_(code), data_(std::move(data)) {}
+  int code() const noexcept { return code_; }
+  const nlohmann::json& data() const noexcept { return data_; }
+
+ private:
+  int code_;
+  nlohmann::json data_;
+};
+
+// The connection failed or dropped, or the server did not answer in time.
+class ConnectionError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class Client {
+ public:
+  // Throws ConnectionError.
+  Client(const std::string& uri, std::chrono::milliseconds timeout = std::chrono::seconds(30));
+  ~Client();
+  Client(Client&& other) noexcept;
+  Client& operator=(Client&&) = delete;
+  Client(const Client&) = delete;
+  Client& operator=(const Client&) = delete;
+
+  const std::string& uri() const noexcept { return uri_; }
+  void set_timeout(std::chrono::milliseconds t) { timeout_ = t; }
+
+  // Sends a request and returns its result; throws RpcError or ConnectionError.
+  nlohmann::json call(const std::string& method, const nlohmann::json& params = nlohmann::json::object());
+  // auth.login with a token (needed on TCP).
+  nlohmann::json login(const std::string& token);
+
+  // The next notification (buffered or read), nullopt after `timeout` without one.
+  std::optional<nlohmann::json> next_notification(std::chrono::milliseconds timeout);
+
+  // Raw access for tools: one line out, one line in.
+  void send_line(const std::string& line);
+  std::optional<std::string> read_line(std::chrono::milliseconds timeout);
+
+ private:
+  int fd_ = -1;
+  std::string uri_;
+  std::chrono::milliseconds timeout_;
+  std::string buffer_;
+  std::deque<nlohmann::json> notifications_;
+  std::int64_t next_id_ = 1;
+};
+
+// unix:PATH / tcp://HOST:PORT → a connected socket fd; throws ConnectionError.
+int connect_uri(const std::string& uri, std::chrono::milliseconds timeout);
+
+}  // namespace gonio::daemon

@@ -1,0 +1,126 @@
+// goniod configuration: one TOML file (toml++), every key validated, unknown keys rejected.
+//
+// The file is converted to JSON and read with json_util::ObjectReader, so a bad key or
+// value fails with the key's dotted path, the value and the allowed range
+// ("divergence.z_threshold = 0 is outside the allowed range [0.5, 100]"). Every key and its
+// default is listed in daemon/README.md; daemon/examples/ holds a file for the mock and one
+// for real hardware. Driver tables ([instrument.motion], [instrument.photometer]) are
+// handed to the driver registry as JSON, which validates them in turn.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace gonio::daemon {
+
+using std::chrono::milliseconds;
+
+enum class Role : int { none = 0, viewer = 1, technician = 2, admin = 3 };
+std::string_view role_name(Role r) noexcept;
+// "viewer" | "technician" | "admin"; throws Error naming `field`.
+Role parse_role(std::string_view text, std::string_view field = "role");
+
+// Where goniod listens: unix:PATH, tcp://HOST:PORT (NDJSON), http://HOST:PORT (HTTP + WS).
+struct ListenUri {
+  enum class Kind { unix_socket, tcp, http };
+  Kind kind = Kind::unix_socket;
+  std::string path;  // unix
+  std::string host;  // tcp, http: a literal IPv4/IPv6 address or "localhost"
+  std::uint16_t port = 0;  // 0: an ephemeral port (logged and written to <state-dir>/ports.json)
+
+  // Throws Error(invalid_argument) naming `field`.
+  static ListenUri parse(std::string_view text, std::string_view field = "listen");
+  std::string to_string() const;
+  bool loopback() const;  // host is 127.0.0.0/8, ::1 or localhost (always true for unix)
+};
+
+struct TokenEntry {
+  std::string name;    // who, for the audit log
+  Role role = Role::viewer;
+  std::string sha256;  // lower-case hex SHA-256 of the token text
+};
+
+// The mock instrument's hidden true sample under `goniod --mock`, and the BSDF of the demo's
+// catalog sample: a glossy orange paint (a diffuse base under a smooth clear coat).
+inline constexpr const char* kDemoSampleBsdf =
+    "lambert:albedo=400:0.06,500:0.12,600:0.45,700:0.55+coat:alpha=0.06,ior=1.5";
+
+struct Config {
+  // [server]
+  std::vector<ListenUri> listen;  // empty: unix:<state-dir>/goniod.sock only
+  bool allow_remote = false;      // tcp/http on a non-loopback address needs this
+  int io_threads = 2;
+  std::size_t max_message_bytes = 1 << 20;
+  milliseconds read_timeout{10000};   // a started message must complete within this
+  milliseconds idle_timeout{0};       // 0: connections may stay idle (subscribers)
+  std::size_t max_queue = 1024;       // queued outgoing messages per connection
+  std::size_t max_connections = 512;
+  std::size_t rpc_threads = 2;        // workers for blocking methods
+  std::string log_level = "info";
+
+  // [auth]
+  std::vector<TokenEntry> tokens;  // [[auth.token]] name, role, sha256
+
+  // [store]
+  bool synchronous_full = true;  // "full": fsync every committed point; "normal": WAL default
+
+  // [instrument]
+  std::string profile = "gcms4";  // preset name or JSON profile path
+  nlohmann::json motion = nlohmann::json::object();      // [instrument.motion] driver table
+  nlohmann::json photometer = nlohmann::json::object();  // [instrument.photometer]
+  milliseconds move_timeout{60000};
+  milliseconds home_timeout{120000};
+  milliseconds measure_timeout{30000};
+  milliseconds settle{0};
+  struct Limits {
+    double incidence_min = 0, incidence_max = 85;
+    double receive_min = -85, receive_max = 85;
+    std::optional<double> min_separation;  // default: the profile's arms.min_separation_deg
+  } limits;
+  bool auto_resume = false;
+  milliseconds auto_resume_delay{30000};
+  int max_auto_resumes = 3;
+
+  // [twin]
+  unsigned twin_threads = 0;  // 0: hardware concurrency
+  double twin_rel_se = 2e-3;
+  std::uint64_t twin_max_samples = 1ull << 20;
+  int twin_replicates = 16;
+  std::uint64_t twin_seed = 1;
+
+  // [divergence]
+  double z_threshold = 5.0;
+  double delta_e_threshold = 3.0;
+  int sustained_m = 3;
+  int sustained_n = 5;
+  double reference_drift = 0.05;     // relative drift of the reference white reading
+  bool pause_on_sustained = false;
+
+  // [webhook]
+  std::string webhook_url;  // http://HOST:PORT/PATH; empty: no webhook
+  int webhook_retries = 5;
+  milliseconds webhook_backoff{500};
+  milliseconds webhook_timeout{5000};
+  std::string webhook_min_severity = "warning";
+
+  // The built-in mock instrument (goniod --mock): instrument.motion and .photometer both
+  // {"driver": "mock"} with the drivers' defaults.
+  static Config mock_defaults();
+  // Throws Error naming "<source>:<line>" for TOML syntax errors, the key path otherwise.
+  static Config parse(std::string_view toml_text, std::string_view source = "<config>",
+                      const std::optional<Config>& base = std::nullopt);
+  static Config load(const std::string& path, const std::optional<Config>& base = std::nullopt);
+  // Checks cross-field rules (sustained_m <= sustained_n, loopback unless allow_remote).
+  void validate() const;
+};
+
+// TOML document → JSON (tables → objects, arrays → arrays, dates → ISO strings).
+nlohmann::json toml_to_json(std::string_view toml_text, std::string_view source);
+
+}  // namespace gonio::daemon

@@ -1,0 +1,65 @@
+// Hub — subscriptions and the notifications pushed to them.
+//
+// A persistent session (NDJSON socket, WebSocket) subscribes to topics; publish() encodes a
+// JSON-RPC notification once and queues it on every subscribed session. A session whose
+// queue is full is dropped by its transport (a slow reader must not hold memory without
+// bound), and the hub forgets sessions that are gone.
+//
+//   topic      notification method    params
+//   progress   scan.progress          {scan, state, points_done, points_total, diverged, eta_s}
+//   points     scan.point             a PointRecord
+//   alerts     alert                  an Alert (new or bumped)
+//   state      instrument.state       instrument.status result
+//              scan.state             {scan, state, reason}
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "gonio/daemon/rpc.hpp"
+
+namespace gonio::daemon {
+
+enum class Topic { progress, points, alerts, state };
+std::string_view topic_name(Topic t) noexcept;
+// Throws Error naming `field` and listing the topics.
+Topic parse_topic(std::string_view text, std::string_view field);
+
+class Hub {
+ public:
+  // Adds topics (optionally only for one scan: progress and points) to the session.
+  void subscribe(const std::shared_ptr<rpc::Session>& s, const std::set<Topic>& topics,
+                 std::optional<std::int64_t> scan);
+  // Removes topics (all when empty). Returns the topics left.
+  std::set<Topic> unsubscribe(std::uint64_t session, const std::set<Topic>& topics);
+  std::set<Topic> topics(std::uint64_t session) const;
+  void remove(std::uint64_t session);
+
+  // `scan` restricts delivery to sessions that subscribed without a scan filter or to it.
+  void publish(Topic topic, std::string_view method, const nlohmann::json& params,
+               std::optional<std::int64_t> scan = std::nullopt);
+
+  std::size_t sessions() const;
+  std::uint64_t dropped() const;  // notifications refused by full or closed sessions
+
+ private:
+  struct Entry {
+    std::weak_ptr<rpc::Session> session;
+    std::set<Topic> topics;
+    std::optional<std::int64_t> scan;
+  };
+  mutable std::mutex mu_;
+  std::map<std::uint64_t, Entry> entries_;
+  std::uint64_t dropped_ = 0;
+};
+
+}  // namespace gonio::daemon

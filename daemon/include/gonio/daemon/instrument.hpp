@@ -1,0 +1,152 @@
+// Instrument — the scheduler and scan runner on the instrument's own thread (DESIGN §5).
+//
+// One thread owns the drivers (they may block). It runs manual commands (home, move, reset)
+// when no scan is running, and otherwise measures one point per loop turn:
+//   move the arms (the order that keeps them clear of each other) → settle → dark →
+//   reference white (per the plan's reference mode) → sample → read the arms back →
+//   β = β_ref (S − D) / (R − D_R) with first-order uncertainty → wait for the twin's
+//   prediction (computed ahead by TwinService) → divergence tests → commit the point →
+//   alerts and notifications.
+// The point is committed before the next move, so a crash loses at most the point being
+// measured, and a restart resumes at the next unmeasured point (Store::next_point_index).
+//
+// Scheduling: interrupted scans first, then queued scans in queue order whose not-before
+// time has passed. A device fault pauses the scan (reason in its state), raises a critical
+// alert and latches the instrument: nothing else starts until a technician resumes a scan
+// or resets the instrument (or auto-resume, when configured, does it). instrument.stop
+// stops the arms at once from any thread and pauses the running scan.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <future>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "gonio/daemon/alerts.hpp"
+#include "gonio/daemon/config.hpp"
+#include "gonio/daemon/divergence.hpp"
+#include "gonio/daemon/hub.hpp"
+#include "gonio/daemon/store.hpp"
+#include "gonio/daemon/twin_service.hpp"
+#include "gonio/drivers/collision.hpp"
+#include "gonio/drivers/motion_controller.hpp"
+#include "gonio/drivers/photometer.hpp"
+
+namespace gonio::daemon {
+
+class Instrument {
+ public:
+  Instrument(const Config& config, Store& store, TwinService& twin, AlertService& alerts, Hub& hub);
+  ~Instrument();
+  Instrument(const Instrument&) = delete;
+  Instrument& operator=(const Instrument&) = delete;
+
+  void start();
+  // Finishes the point in progress, parks the running scan as `interrupted` and joins the
+  // thread. Idempotent.
+  void shutdown();
+
+  // ---- scheduler (any thread)
+  void wake();
+  Scan pause(std::int64_t scan, const std::string& actor, const std::string& reason);
+  Scan resume(std::int64_t scan, const std::string& actor);
+  Scan cancel(std::int64_t scan, const std::string& actor, const std::string& reason);
+  std::optional<std::int64_t> running_scan() const;
+  // Throws Error(plan_rejected) naming the geometry ("geometries[12]") and the limit.
+  void validate_plan(const ScanPlan& plan) const;
+
+  // ---- instrument commands (block the calling thread until done)
+  nlohmann::json status() const;
+  nlohmann::json home(std::vector<drivers::Axis> axes, const std::string& actor);
+  nlohmann::json move(const std::map<drivers::Axis, double>& targets, const std::string& actor);
+  nlohmann::json reset(const std::string& actor);
+  // Any thread, immediate: stops every axis and pauses the running scan.
+  nlohmann::json stop(const std::string& actor);
+
+  // Runner statistics for system.info: points measured since start and the daemon's own
+  // time per point (excluding motion, photometer and twin), in ms.
+  nlohmann::json stats() const;
+  // Last time the runner thread went round its loop (for the systemd watchdog).
+  std::chrono::steady_clock::time_point heartbeat() const;
+  // Called with a one-line status on scan transitions (sd_notify STATUS). Set before start().
+  void set_status_listener(std::function<void(const std::string&)> f) {
+    status_listener_ = std::move(f);
+  }
+
+ private:
+  struct Run;
+  struct Command {
+    std::function<nlohmann::json()> fn;
+    std::promise<nlohmann::json> done;
+  };
+
+  void loop();
+  void open_devices();
+  void start_run(const Scan& scan);
+  void step();                        // measures one point of the current run
+  void finish_run(ScanState state, const std::string& reason, const std::string& actor);
+  void on_device_fault(const Error& e);
+  nlohmann::json submit(std::function<nlohmann::json()> fn);
+  void set_state(std::string state, std::string detail = {});
+  void settle_state(std::string detail = {});  // "fault" while latched, else "idle"
+  void publish_state();
+  void move_arms(double incidence, double receive, std::optional<double> rotation);
+  nlohmann::json positions_json() const;
+  void publish_progress();
+
+  const Config& config_;
+  Store& store_;
+  TwinService& twin_;
+  AlertService& alerts_;
+  Hub& hub_;
+  DivergenceSettings divergence_;
+  drivers::MotionGuard guard_;
+
+  // Owned by the runner thread; the pointers themselves are read by stop() under mu_.
+  std::unique_ptr<drivers::MotionController> motion_;
+  std::unique_ptr<drivers::Photometer> photometer_;
+
+  // Lock order: sched_mu_ (scan state transitions) before mu_ (the runner's state).
+  mutable std::mutex sched_mu_;
+  mutable std::mutex mu_;
+  std::condition_variable cv_;
+  std::function<void(const std::string&)> status_listener_;
+  std::thread thread_;
+  bool stopping_ = false;
+  bool started_ = false;
+  std::deque<std::shared_ptr<Command>> commands_;
+  std::unique_ptr<Run> run_;
+  std::optional<std::int64_t> running_;
+  enum class Control { none, pause, cancel };
+  Control control_ = Control::none;
+  std::string control_reason_, control_actor_;
+  bool fault_latched_ = false;
+  std::string fault_reason_;
+  std::optional<std::pair<std::int64_t, std::chrono::steady_clock::time_point>> auto_resume_;
+  std::map<std::int64_t, int> auto_resumes_;
+  std::string state_ = "starting", state_detail_;
+  std::optional<std::chrono::steady_clock::time_point> next_open_attempt_;
+  std::string open_error_;
+  // Cached device facts (under mu_).
+  std::vector<drivers::Axis> axes_;
+  std::map<drivers::Axis, double> positions_;
+  std::optional<WavelengthGrid> photometer_grid_;
+  std::string photometer_identity_;
+  std::atomic<std::int64_t> heartbeat_ns_{0};
+  // Statistics (under mu_).
+  std::uint64_t points_measured_ = 0;
+  std::deque<double> overhead_ms_;  // the last 1000 points
+};
+
+}  // namespace gonio::daemon

@@ -1,0 +1,46 @@
+// The JSON-RPC methods of goniod (documented in proto/openrpc.json and daemon/README.md).
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "gonio/daemon/alerts.hpp"
+#include "gonio/daemon/auth.hpp"
+#include "gonio/daemon/config.hpp"
+#include "gonio/daemon/hub.hpp"
+#include "gonio/daemon/instrument.hpp"
+#include "gonio/daemon/rpc.hpp"
+#include "gonio/daemon/store.hpp"
+#include "gonio/daemon/twin_service.hpp"
+
+namespace gonio::daemon {
+
+// The OpenRPC document (proto/openrpc.json), embedded at build time.
+const std::string& openrpc_text();
+const nlohmann::json& openrpc_document();
+
+struct Services {
+  const Config& config;
+  std::filesystem::path state_dir;
+  Store& store;
+  Auth& auth;
+  Hub& hub;
+  TwinService& twin;
+  AlertService& alerts;
+  Instrument& instrument;
+  const rpc::Dispatcher* dispatcher = nullptr;
+  std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();
+  std::string started_at;
+  std::function<nlohmann::json()> transport_stats;  // connections, listeners
+};
+
+void register_methods(rpc::Dispatcher& d, Services& s);
+
+// Resident set size of this process in bytes (/proc/self/statm), 0 when unknown.
+std::size_t resident_bytes();
+
+}  // namespace gonio::daemon

@@ -1,0 +1,75 @@
+// Network transports of goniod. Boost.Asio and Boost.Beast stay inside the .cpp files of
+// this family (one per listener kind), so that the rest of the daemon compiles without them.
+//
+//   unix:PATH          NDJSON, one JSON-RPC message per line; the socket file is mode 0660
+//                      and a peer that can open it is trusted as admin (the file mode is the
+//                      local gate); the audit log names it "unix:uid=N".
+//   tcp://HOST:PORT    NDJSON; nothing but rpc.discover and auth.login is answered before
+//                      auth.login with a valid token.
+//   http://HOST:PORT   POST /rpc (one message per request, Authorization: Bearer TOKEN) and
+//                      GET /ws (WebSocket, text frames, one message per frame; the bearer
+//                      header at the upgrade or auth.login as the first call).
+//
+// Every connection: a size limit per message (the connection is told -32600 and closed),
+// a read timeout for a started message (stalled peers are dropped), an optional idle
+// timeout, at most `max_in_flight` requests being processed (reading pauses), and a
+// bounded outgoing queue (a peer that does not read is dropped rather than buffered).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "gonio/daemon/alerts.hpp"
+#include "gonio/daemon/auth.hpp"
+#include "gonio/daemon/config.hpp"
+#include "gonio/daemon/hub.hpp"
+#include "gonio/daemon/rpc.hpp"
+
+namespace boost::asio {
+class io_context;
+}
+
+namespace gonio::daemon::net {
+
+struct Limits {
+  std::size_t max_message_bytes = 1 << 20;
+  std::chrono::milliseconds read_timeout{10000};
+  std::chrono::milliseconds idle_timeout{0};
+  std::size_t max_queue = 1024;
+  std::size_t max_connections = 512;
+  std::size_t max_in_flight = 16;
+
+  static Limits from(const Config& c);
+};
+
+struct Context {
+  const rpc::Dispatcher& dispatcher;
+  Hub& hub;
+  const Auth& auth;
+  Limits limits;
+};
+
+class Listener {
+ public:
+  virtual ~Listener() = default;
+  virtual std::string endpoint() const = 0;  // the bound URI (real port when 0 was asked)
+  virtual void close() = 0;                  // stops accepting and closes every connection
+  virtual nlohmann::json stats() const = 0;  // {"endpoint", "connections", "accepted", "dropped"}
+};
+
+// Throw Error(io_error) when the address cannot be bound.
+std::shared_ptr<Listener> listen_unix(boost::asio::io_context& io, const std::string& path,
+                                      const Context& ctx);
+std::shared_ptr<Listener> listen_tcp(boost::asio::io_context& io, const std::string& host,
+                                     std::uint16_t port, const Context& ctx);
+std::shared_ptr<Listener> listen_http(boost::asio::io_context& io, const std::string& host,
+                                      std::uint16_t port, const Context& ctx);
+
+// The alert webhook: POSTs each payload as JSON to `url` with retries and back-off.
+std::shared_ptr<AlertSink> make_webhook(boost::asio::io_context& io, const Config& config);
+
+}  // namespace gonio::daemon::net

@@ -1,0 +1,143 @@
+// JSON-RPC 2.0 (https://www.jsonrpc.org/specification) — message handling, independent of
+// the transport.
+//
+// The Dispatcher takes one message (a request, a notification or a batch) as text and
+// produces the response text: batches answer with an array in request order, notifications
+// (no "id") never answer, an all-notification batch answers with nothing, an empty batch is
+// one -32600. Standard codes: -32700 parse error, -32600 invalid request, -32601 method not
+// found, -32602 invalid params, -32603 internal error. Server errors (-32000…-32099) map
+// from gonio::Errc with fixed meanings (code_for(); the table is in proto/openrpc.json);
+// error.data is {"errc": "<id>", "field": "<field>"} so that clients can point at the
+// offending input.
+//
+// Methods declare the least role that may call them and whether they block (instrument,
+// twin, file work): blocking ones run on the worker executor so that the network threads
+// never wait on a device.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "gonio/daemon/auth.hpp"
+#include "gonio/proto/error.hpp"
+
+namespace gonio::daemon::rpc {
+
+namespace code {
+inline constexpr int parse_error = -32700;
+inline constexpr int invalid_request = -32600;
+inline constexpr int method_not_found = -32601;
+inline constexpr int invalid_params = -32602;
+inline constexpr int internal_error = -32603;
+// Server errors, stable meanings (proto/openrpc.json, x-error-codes).
+inline constexpr int unauthorized = -32000;      // no or unknown token: auth.login first
+inline constexpr int forbidden = -32001;         // the token's role may not call this
+inline constexpr int not_found = -32002;         // no such sample / scan / alert / token
+inline constexpr int invalid_state = -32003;     // not allowed in the current state
+inline constexpr int instrument_busy = -32004;   // the instrument is running a scan or a command
+inline constexpr int instrument_fault = -32005;  // a device failed (timeout, alarm, link, ...)
+inline constexpr int plan_rejected = -32006;     // a scan plan failed validation
+inline constexpr int limit_violation = -32007;   // a move outside soft limits / collision zone
+inline constexpr int unsupported = -32008;       // valid but not possible here
+inline constexpr int io_error = -32009;          // the server could not read or write a file
+inline constexpr int overloaded = -32010;        // too many requests in flight on a connection
+}  // namespace code
+
+// The JSON-RPC code of a gonio::Error.
+int code_for(Errc e) noexcept;
+// {"code", "message", "data": {"errc", "field"}}
+nlohmann::json error_object(int code, std::string_view message, Errc errc = Errc::internal,
+                            std::string_view field = {});
+nlohmann::json error_object(const Error& e);
+
+// One connection (or one HTTP request): who is calling and how to push notifications.
+class Session {
+ public:
+  Session(std::string transport, std::string peer, bool persistent);
+  virtual ~Session() = default;
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  std::uint64_t id() const noexcept { return id_; }
+  const std::string& transport() const noexcept { return transport_; }
+  const std::string& peer() const noexcept { return peer_; }
+  // Whether notifications can reach this session (false for HTTP POST).
+  bool persistent() const noexcept { return persistent_; }
+
+  Principal principal() const;
+  void set_principal(Principal p);
+
+  // Queues a notification (one JSON text); false when the session is closed or its queue
+  // is full (the transport then drops the connection).
+  virtual bool push(std::shared_ptr<const std::string> message) = 0;
+
+ private:
+  static std::atomic<std::uint64_t> next_id_;
+  std::uint64_t id_;
+  std::string transport_, peer_;
+  bool persistent_;
+  mutable std::mutex mu_;
+  Principal principal_;
+};
+
+struct Call {
+  std::shared_ptr<Session> session;
+  Principal principal;
+  std::string method;
+  const nlohmann::json& params;  // always an object ({} when absent)
+};
+
+using Handler = std::function<nlohmann::json(Call&)>;
+
+struct Method {
+  std::string name;
+  Role role = Role::viewer;  // Role::none: callable before authentication
+  bool blocking = false;
+  Handler handler;
+};
+
+// Runs a blocking task somewhere else (a worker pool).
+using Executor = std::function<void(std::function<void()>)>;
+
+class Dispatcher {
+ public:
+  explicit Dispatcher(Executor blocking);
+
+  void add(Method m);
+  bool has(std::string_view name) const;
+  std::vector<std::string> names() const;
+
+  // Handles one message. `reply` is called exactly once, possibly on another thread, with
+  // the response text, or with an empty string when nothing is to be sent.
+  void handle(std::string_view text, const std::shared_ptr<Session>& session,
+              std::function<void(std::string)> reply) const;
+
+  // Counters for system.info.
+  std::uint64_t requests() const noexcept { return requests_.load(); }
+  std::uint64_t errors() const noexcept { return errors_.load(); }
+
+ private:
+  struct Pending;
+  void handle_one(const nlohmann::json& request, const std::shared_ptr<Session>& session,
+                  std::function<void(std::optional<nlohmann::json>)> done) const;
+
+  Executor blocking_;
+  std::map<std::string, Method, std::less<>> methods_;
+  mutable std::atomic<std::uint64_t> requests_{0}, errors_{0};
+};
+
+// A response object for `id` with `result`.
+nlohmann::json response(const nlohmann::json& id, nlohmann::json result);
+// A notification text {"jsonrpc":"2.0","method":..,"params":..}.
+std::string notification(std::string_view method, const nlohmann::json& params);
+
+}  // namespace gonio::daemon::rpc

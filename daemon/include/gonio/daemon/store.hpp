@@ -1,0 +1,153 @@
+// Store — the daemon's durable state in one SQLite file (WAL mode) in the state dir.
+//
+// Tables: samples, scans (plan as JSON, state, queue position), points (one row per
+// measured point, primary key (scan_id, idx), so a point can never be stored twice),
+// alerts, audit (who did what, when) and tokens (hashes only). The schema version is
+// PRAGMA user_version; migrations run in order inside a transaction at open, and a file
+// written by a newer goniod is refused rather than guessed at.
+//
+// Durability: with synchronous = FULL every committed point is on disk (WAL fsynced)
+// before insert_point() returns, which is what lets the scan runner move the arms only
+// after the previous point is safe. Writes go through one connection under a mutex;
+// reads use a small pool of their own connections, which WAL lets run beside a writer.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "gonio/daemon/config.hpp"
+#include "gonio/proto/alert.hpp"
+#include "gonio/proto/point.hpp"
+#include "gonio/proto/sample.hpp"
+#include "gonio/proto/scan.hpp"
+
+struct sqlite3;
+
+namespace gonio::daemon {
+
+struct AuditEvent {
+  std::int64_t id = 0;
+  std::string at;
+  std::string actor;
+  std::string action;   // "scan.submit", "alert.ack", "daemon.start", ...
+  std::string target;   // "scan:12", "sample:glossy", ""
+  nlohmann::json detail = nlohmann::json::object();
+};
+
+// What a caller asks to raise; the store deduplicates on dedup_key.
+struct AlertDraft {
+  std::string kind;
+  Severity severity = Severity::warning;
+  std::string dedup_key;
+  std::optional<std::int64_t> scan_id, sample_id, point_index;
+  std::string message;
+};
+
+struct ScanFilter {
+  std::optional<ScanState> state;
+  std::optional<std::int64_t> sample_id;
+  std::size_t offset = 0, limit = 100;
+};
+
+struct AlertFilter {
+  std::optional<bool> acknowledged;
+  std::optional<std::int64_t> scan_id;
+  std::optional<Severity> min_severity;
+  std::size_t offset = 0, limit = 100;
+};
+
+class Store {
+ public:
+  static constexpr int kSchemaVersion = 2;
+
+  // Opens (creating) the database; runs migrations. Throws Error(io_error) when the file
+  // cannot be opened, Error(unsupported) when it is newer than this build.
+  Store(const std::filesystem::path& file, bool synchronous_full = true);
+  ~Store();
+  Store(const Store&) = delete;
+  Store& operator=(const Store&) = delete;
+
+  int schema_version() const;
+  const std::filesystem::path& path() const noexcept { return path_; }
+
+  // ---- samples
+  // Throws Error(invalid_state) naming "name" when the name is taken.
+  Sample create_sample(const SampleSpec& spec, const std::string& actor);
+  std::optional<Sample> sample(std::int64_t id) const;
+  std::optional<Sample> sample_by_name(const std::string& name) const;
+  std::vector<Sample> samples(std::size_t offset = 0, std::size_t limit = 1000) const;
+
+  // ---- scans
+  Scan insert_scan(const ScanPlan& plan, bool predicted, const std::string& actor);
+  std::optional<Scan> scan(std::int64_t id) const;
+  std::vector<Scan> scans(const ScanFilter& filter) const;
+  // Waiting scans (queued, paused, interrupted) in queue order.
+  std::vector<Scan> queue() const;
+  // The scan to run next: interrupted ones first (they were running), then queued ones whose
+  // not-before time has passed, in queue order. `earliest_not_before` receives the nearest
+  // future not-before time among queued scans, if any.
+  std::optional<Scan> next_runnable(const std::string& now_iso,
+                                    std::optional<std::string>* earliest_not_before = nullptr) const;
+  // Sets the state (and reason); started_at is set on the first transition to running,
+  // finished_at on a final state. Writes an audit event in the same transaction.
+  void set_scan_state(std::int64_t id, ScanState state, const std::string& reason,
+                      const std::string& actor);
+  // Moves a waiting scan to `position` (0 = first) among the waiting scans.
+  void reorder(std::int64_t id, std::size_t position, const std::string& actor);
+  // At start-up: every scan left `running` by a crash becomes `interrupted`. Returns them.
+  std::vector<std::int64_t> recover_running(const std::string& reason);
+
+  // ---- points
+  // Inserts the point and updates the scan's counters in one transaction. Throws
+  // Error(invalid_state) when that point is already stored.
+  void insert_point(const PointRecord& p);
+  std::vector<PointRecord> points(std::int64_t scan_id, std::size_t offset, std::size_t limit) const;
+  // Raw JSON text of points (what scan.points serves without re-encoding).
+  std::vector<std::string> point_json(std::int64_t scan_id, std::size_t offset,
+                                      std::size_t limit) const;
+  std::size_t point_count(std::int64_t scan_id) const;
+  // The lowest point index not yet stored (= count when points are stored in order).
+  std::int64_t next_point_index(std::int64_t scan_id) const;
+
+  // ---- alerts
+  // Inserts a new alert or, while one with the same dedup_key is unacknowledged, bumps its
+  // count, last_at, severity (never lowered), point and message. `created` tells which.
+  Alert raise_alert(const AlertDraft& draft, bool* created = nullptr);
+  std::optional<Alert> alert(std::int64_t id) const;
+  std::vector<Alert> alerts(const AlertFilter& filter) const;
+  // Throws Error(not_found); acknowledging twice is allowed and keeps the first ack.
+  Alert ack_alert(std::int64_t id, const std::string& actor);
+
+  // ---- audit
+  void audit(const std::string& actor, const std::string& action, const std::string& target,
+             const nlohmann::json& detail = nlohmann::json::object());
+  std::vector<AuditEvent> audit_events(std::size_t offset, std::size_t limit) const;
+
+  // ---- tokens (hashes only)
+  void put_token(const TokenEntry& t);
+  bool delete_token(const std::string& name);
+  std::vector<TokenEntry> tokens() const;
+
+  struct Connection;  // a sqlite3 handle with its cached statements
+
+ private:
+  class ReadLease;
+  ReadLease read() const;
+  void migrate();
+
+  std::filesystem::path path_;
+  bool synchronous_full_;
+  mutable std::mutex write_mu_;
+  std::unique_ptr<Connection> writer_;
+  mutable std::mutex pool_mu_;
+  mutable std::vector<std::unique_ptr<Connection>> readers_;
+};
+
+}  // namespace gonio::daemon

@@ -1,0 +1,92 @@
+// TwinService — the twin's worker pool inside goniod.
+//
+// Predictions of a scan are computed ahead of the arms: a Batch keeps up to `window`
+// geometries in flight beyond the one the runner waits for, in measuring order, and frees
+// predictions once the runner has moved past them (memory stays bounded for long scans).
+// twin.predict requests from the API use the same pool. Workers are plain threads: the
+// twin is CPU-bound and thread-safe (Twin::predict).
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <exception>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "gonio/daemon/config.hpp"
+#include "gonio/proto/geometry.hpp"
+#include "gonio/twin/instrument.hpp"
+#include "gonio/twin/twin.hpp"
+
+namespace gonio::daemon {
+
+class TwinService {
+ public:
+  TwinService(const Config& config, twin::InstrumentProfile profile);
+  ~TwinService();
+  TwinService(const TwinService&) = delete;
+  TwinService& operator=(const TwinService&) = delete;
+
+  const twin::InstrumentProfile& profile() const noexcept { return profile_; }
+  const twin::EstimatorOptions& options() const noexcept { return options_; }
+  unsigned threads() const noexcept { return static_cast<unsigned>(workers_.size()); }
+  // "gonio-twin 0.1.0 rqmc rel_se=0.002 R=16 seed=1 profile=gcms4"
+  const std::string& version() const noexcept { return version_; }
+
+  // A twin for a BSDF spec on `grid`; throws Error naming `field` (e.g. "bsdf").
+  std::shared_ptr<const twin::Twin> make(const std::string& bsdf, const WavelengthGrid& grid,
+                                         const std::string& field = "bsdf") const;
+
+  class Batch {
+   public:
+    // Blocks until the prediction of geometry `i` is ready (rethrows its error). Moves the
+    // look-ahead window forward and frees earlier predictions.
+    twin::Prediction wait(std::size_t i);
+    void cancel();
+    ~Batch();
+
+   private:
+    friend class TwinService;
+    struct State;
+    Batch(TwinService& pool, std::shared_ptr<const twin::Twin> twin, std::vector<Geometry> geoms,
+          std::size_t first, std::size_t window);
+    void submit_upto(std::size_t end);  // caller holds state_->mu
+
+    TwinService& pool_;
+    std::shared_ptr<const twin::Twin> twin_;
+    std::vector<Geometry> geometries_;
+    std::size_t window_;
+    std::shared_ptr<State> state_;  // shared with queued tasks, which may outlive the batch
+  };
+
+  // Starts predicting geometries from index `first` on.
+  std::shared_ptr<Batch> batch(std::shared_ptr<const twin::Twin> twin, std::vector<Geometry> geometries,
+                               std::size_t first = 0, std::size_t window = 0);
+
+  // Predicts every geometry (blocking; uses the pool). Results in order.
+  std::vector<twin::Prediction> predict(const twin::Twin& twin, const std::vector<Geometry>& geometries,
+                                        const twin::EstimatorOptions& options);
+
+  std::size_t queued() const;
+
+ private:
+  void post(std::function<void()> task);
+  void work();
+
+  twin::InstrumentProfile profile_;
+  twin::EstimatorOptions options_;
+  std::string version_;
+  mutable std::mutex mu_;
+  std::condition_variable cv_;
+  std::deque<std::function<void()>> tasks_;
+  bool stopping_ = false;
+  std::vector<std::thread> workers_;
+};
+
+}  // namespace gonio::daemon

@@ -1,0 +1,369 @@
+// goniod configuration from TOML (see config.hpp; keys documented in daemon/README.md).
+#include "gonio/daemon/config.hpp"
+
+#include <arpa/inet.h>
+
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+#include "gonio/proto/error.hpp"
+#include "gonio/proto/json_util.hpp"
+
+namespace gonio::daemon {
+namespace {
+
+using json_util::ObjectReader;
+using nlohmann::json;
+
+json node_to_json(const toml::node& n) {
+  if (const auto* t = n.as_table()) {
+    json o = json::object();
+    for (const auto& [k, v] : *t) o[std::string(k.str())] = node_to_json(v);
+    return o;
+  }
+  if (const auto* a = n.as_array()) {
+    json arr = json::array();
+    for (const auto& v : *a) arr.push_back(node_to_json(v));
+    return arr;
+  }
+  if (const auto* s = n.as_string()) return json(s->get());
+  if (const auto* i = n.as_integer()) return json(i->get());
+  if (const auto* d = n.as_floating_point()) return json(d->get());
+  if (const auto* b = n.as_boolean()) return json(b->get());
+  std::ostringstream os;  // dates and times: their TOML text
+  if (const auto* dt = n.as_date_time()) os << *dt;
+  else if (const auto* d = n.as_date()) os << *d;
+  else if (const auto* t = n.as_time()) os << *t;
+  return json(os.str());
+}
+
+double number_in(ObjectReader& r, const std::string& key, double fallback, double lo, double hi) {
+  const double v = r.optional<double>(key, fallback);
+  if (!(v >= lo && v <= hi)) throw Error::out_of_range(r.path(key), v, lo, hi);
+  return v;
+}
+
+long long integer_in(ObjectReader& r, const std::string& key, long long fallback, long long lo,
+                     long long hi) {
+  const auto v = r.optional<long long>(key, fallback);
+  if (v < lo || v > hi)
+    throw Error::out_of_range(r.path(key), static_cast<double>(v), static_cast<double>(lo),
+                              static_cast<double>(hi));
+  return v;
+}
+
+milliseconds seconds_in(ObjectReader& r, const std::string& key, milliseconds fallback,
+                        double lo_s, double hi_s) {
+  const double s = number_in(r, key, static_cast<double>(fallback.count()) / 1000.0, lo_s, hi_s);
+  return milliseconds(static_cast<long long>(s * 1000.0 + 0.5));
+}
+
+bool is_hex64(const std::string& s) {
+  if (s.size() != 64) return false;
+  for (char c : s)
+    if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'))) return false;
+  return true;
+}
+
+json table(ObjectReader& r, const std::string& key) {
+  const auto* t = r.raw(key);
+  if (!t) return json::object();
+  if (!t->is_object()) throw Error::invalid(r.path(key), "expected a table");
+  return *t;
+}
+
+}  // namespace
+
+std::string_view role_name(Role r) noexcept {
+  switch (r) {
+    case Role::none: return "none";
+    case Role::viewer: return "viewer";
+    case Role::technician: return "technician";
+    case Role::admin: return "admin";
+  }
+  return "none";
+}
+
+Role parse_role(std::string_view text, std::string_view field) {
+  if (text == "viewer") return Role::viewer;
+  if (text == "technician") return Role::technician;
+  if (text == "admin") return Role::admin;
+  throw Error::invalid(std::string(field),
+                       fmt::format("'{}' is not a role (allowed: viewer, technician, admin)", text));
+}
+
+ListenUri ListenUri::parse(std::string_view text, std::string_view field) {
+  const std::string f(field);
+  ListenUri u;
+  const auto host_port = [&](std::string_view rest, std::string_view scheme) {
+    std::string_view host, port;
+    if (!rest.empty() && rest.front() == '[') {  // [::1]:7700
+      const auto close = rest.find(']');
+      if (close == std::string_view::npos || close + 1 >= rest.size() || rest[close + 1] != ':')
+        throw Error::invalid(f, fmt::format("'{}': expected {}[ADDRESS]:PORT", text, scheme));
+      host = rest.substr(1, close - 1), port = rest.substr(close + 2);
+    } else {
+      const auto colon = rest.rfind(':');
+      if (colon == std::string_view::npos)
+        throw Error::invalid(f, fmt::format("'{}': expected {}HOST:PORT", text, scheme));
+      host = rest.substr(0, colon), port = rest.substr(colon + 1);
+    }
+    if (!port.empty() && port.back() == '/') port.remove_suffix(1);
+    if (host.empty()) throw Error::invalid(f, fmt::format("'{}': empty host", text));
+    unsigned long p = 0;
+    if (port.empty() || port.size() > 5 ||
+        port.find_first_not_of("0123456789") != std::string_view::npos ||
+        (p = std::stoul(std::string(port))) > 65535)
+      throw Error::invalid(f, fmt::format("'{}': port must be 0..65535", text));
+    u.host = std::string(host);
+    u.port = static_cast<std::uint16_t>(p);
+    unsigned char buf[16];
+    if (u.host != "localhost" && inet_pton(AF_INET, u.host.c_str(), buf) != 1 &&
+        inet_pton(AF_INET6, u.host.c_str(), buf) != 1)
+      throw Error::invalid(f, fmt::format("'{}': host must be a numeric address or localhost",
+                                          text));
+  };
+  if (text.starts_with("unix:")) {
+    u.kind = Kind::unix_socket;
+    u.path = std::string(text.substr(5));
+    if (u.path.empty()) throw Error::invalid(f, "unix: needs a path (unix:/run/gonio/goniod.sock)");
+    if (u.path.size() >= 108)
+      throw Error::invalid(f, fmt::format("socket path has {} bytes, the limit is 107",
+                                          u.path.size()));
+  } else if (text.starts_with("tcp://")) {
+    u.kind = Kind::tcp;
+    host_port(text.substr(6), "tcp://");
+  } else if (text.starts_with("http://")) {
+    u.kind = Kind::http;
+    host_port(text.substr(7), "http://");
+  } else {
+    throw Error::invalid(f, fmt::format("'{}' is not unix:PATH, tcp://HOST:PORT or "
+                                        "http://HOST:PORT",
+                                        text));
+  }
+  return u;
+}
+
+std::string ListenUri::to_string() const {
+  const auto hp = host.find(':') != std::string::npos ? fmt::format("[{}]:{}", host, port)
+                                                       : fmt::format("{}:{}", host, port);
+  switch (kind) {
+    case Kind::unix_socket: return "unix:" + path;
+    case Kind::tcp: return "tcp://" + hp;
+    case Kind::http: return "http://" + hp;
+  }
+  return {};
+}
+
+bool ListenUri::loopback() const {
+  if (kind == Kind::unix_socket || host == "localhost" || host == "::1") return true;
+  in_addr a{};
+  if (inet_pton(AF_INET, host.c_str(), &a) == 1) return (ntohl(a.s_addr) >> 24) == 127;
+  return false;
+}
+
+json toml_to_json(std::string_view text, std::string_view source) {
+  try {
+    return node_to_json(toml::parse(text, source));
+  } catch (const toml::parse_error& e) {
+    throw Error(Errc::parse_error,
+                fmt::format("{}:{}:{}: {}", source, e.source().begin.line,
+                            e.source().begin.column, e.description()),
+                "config");
+  }
+}
+
+Config Config::mock_defaults() {
+  Config c;
+  c.motion = json{{"driver", "mock"}, {"sample", kDemoSampleBsdf}};
+  c.photometer = json{{"driver", "mock"}};
+  return c;
+}
+
+Config Config::parse(std::string_view text, std::string_view source, const std::optional<Config>& base) {
+  const json doc = toml_to_json(text, source);
+  Config c = base.value_or(Config{});
+  ObjectReader top(doc, "");
+
+  if (const json server = table(top, "server"); !server.empty()) {
+    ObjectReader r(server, "server");
+    if (const auto* l = r.raw("listen")) {
+      if (!l->is_array()) throw Error::invalid("server.listen", "expected an array of URIs");
+      c.listen.clear();
+      for (std::size_t i = 0; i < l->size(); ++i) {
+        const auto field = fmt::format("server.listen[{}]", i);
+        c.listen.push_back(ListenUri::parse(json_util::get_as<std::string>((*l)[i], field), field));
+      }
+    }
+    c.allow_remote = r.optional<bool>("allow_remote", c.allow_remote);
+    c.io_threads = static_cast<int>(integer_in(r, "io_threads", c.io_threads, 1, 64));
+    c.rpc_threads = static_cast<std::size_t>(integer_in(r, "rpc_threads", static_cast<long long>(c.rpc_threads), 1, 64));
+    c.max_message_bytes = static_cast<std::size_t>(
+        integer_in(r, "max_message_bytes", static_cast<long long>(c.max_message_bytes), 1024,
+                   64ll << 20));
+    c.read_timeout = seconds_in(r, "read_timeout_s", c.read_timeout, 0.1, 3600);
+    c.idle_timeout = seconds_in(r, "idle_timeout_s", c.idle_timeout, 0, 86400);
+    c.max_queue = static_cast<std::size_t>(
+        integer_in(r, "max_queue", static_cast<long long>(c.max_queue), 1, 1 << 20));
+    c.max_connections = static_cast<std::size_t>(
+        integer_in(r, "max_connections", static_cast<long long>(c.max_connections), 1, 65536));
+    c.log_level = r.optional<std::string>("log_level", c.log_level);
+    if (c.log_level != "trace" && c.log_level != "debug" && c.log_level != "info" &&
+        c.log_level != "warn" && c.log_level != "error")
+      throw Error::invalid("server.log_level", fmt::format("'{}' is not one of trace, debug, "
+                                                           "info, warn, error",
+                                                           c.log_level));
+    r.finish();
+  }
+
+  if (const json auth = table(top, "auth"); !auth.empty()) {
+    ObjectReader r(auth, "auth");
+    if (const auto* toks = r.raw("token")) {
+      if (!toks->is_array()) throw Error::invalid("auth.token", "expected [[auth.token]] tables");
+      c.tokens.clear();
+      for (std::size_t i = 0; i < toks->size(); ++i) {
+        ObjectReader t((*toks)[i], fmt::format("auth.token[{}]", i));
+        TokenEntry e;
+        e.name = t.required<std::string>("name");
+        if (e.name.empty() || e.name.size() > 64)
+          throw Error::invalid(t.path("name"), "must have 1 to 64 characters");
+        e.role = parse_role(t.required<std::string>("role"), t.path("role"));
+        e.sha256 = t.required<std::string>("sha256");
+        if (!is_hex64(e.sha256))
+          throw Error::invalid(t.path("sha256"), "must be 64 lower-case hex digits (the SHA-256 "
+                                                 "of the token; `gonioctl token-hash`)");
+        t.finish();
+        c.tokens.push_back(std::move(e));
+      }
+    }
+    r.finish();
+  }
+
+  if (const json store = table(top, "store"); !store.empty()) {
+    ObjectReader r(store, "store");
+    const auto sync = r.optional<std::string>("synchronous", c.synchronous_full ? "full" : "normal");
+    if (sync != "full" && sync != "normal")
+      throw Error::invalid("store.synchronous", fmt::format("'{}' is not full or normal", sync));
+    c.synchronous_full = sync == "full";
+    r.finish();
+  }
+
+  if (const json inst = table(top, "instrument"); !inst.empty()) {
+    ObjectReader r(inst, "instrument");
+    c.profile = r.optional<std::string>("profile", c.profile);
+    if (const auto* m = r.raw("motion")) {
+      if (!m->is_object() || !m->contains("driver"))
+        throw Error::invalid("instrument.motion", "expected a table with a 'driver' key");
+      c.motion = *m;
+    }
+    if (const auto* p = r.raw("photometer")) {
+      if (!p->is_object() || !p->contains("driver"))
+        throw Error::invalid("instrument.photometer", "expected a table with a 'driver' key");
+      c.photometer = *p;
+    }
+    c.move_timeout = seconds_in(r, "move_timeout_s", c.move_timeout, 0.1, 3600);
+    c.home_timeout = seconds_in(r, "home_timeout_s", c.home_timeout, 0.1, 3600);
+    c.measure_timeout = seconds_in(r, "measure_timeout_s", c.measure_timeout, 0.1, 3600);
+    c.settle = seconds_in(r, "settle_s", c.settle, 0, 60);
+    c.auto_resume = r.optional<bool>("auto_resume", c.auto_resume);
+    c.auto_resume_delay = seconds_in(r, "auto_resume_delay_s", c.auto_resume_delay, 0, 86400);
+    c.max_auto_resumes = static_cast<int>(integer_in(r, "max_auto_resumes", c.max_auto_resumes, 0, 1000));
+    if (const auto* lim = r.raw("limits")) {
+      ObjectReader l(*lim, "instrument.limits");
+      const auto pair = [&](const std::string& key, double& lo, double& hi, double min, double max) {
+        const auto* v = l.raw(key);
+        if (!v) return;
+        const auto field = l.path(key);
+        if (!v->is_array() || v->size() != 2)
+          throw Error::invalid(field, "expected [MIN, MAX] in degrees");
+        lo = json_util::get_as<double>((*v)[0], field + "[0]");
+        hi = json_util::get_as<double>((*v)[1], field + "[1]");
+        if (!(lo >= min && lo <= max)) throw Error::out_of_range(field + "[0]", lo, min, max, "°");
+        if (!(hi >= lo && hi <= max)) throw Error::out_of_range(field + "[1]", hi, lo, max, "°");
+      };
+      pair("incidence", c.limits.incidence_min, c.limits.incidence_max, 0, 89.9);
+      pair("receive", c.limits.receive_min, c.limits.receive_max, -180, 180);
+      if (l.has("min_separation")) c.limits.min_separation = number_in(l, "min_separation", 0, 0, 179);
+      l.finish();
+    }
+    r.finish();
+  }
+
+  if (const json twin = table(top, "twin"); !twin.empty()) {
+    ObjectReader r(twin, "twin");
+    c.twin_threads = static_cast<unsigned>(integer_in(r, "threads", c.twin_threads, 0, 256));
+    c.twin_rel_se = number_in(r, "rel_se", c.twin_rel_se, 1e-5, 0.5);
+    c.twin_max_samples = static_cast<std::uint64_t>(
+        integer_in(r, "max_samples", static_cast<long long>(c.twin_max_samples), 1024, 1ll << 34));
+    c.twin_replicates = static_cast<int>(integer_in(r, "replicates", c.twin_replicates, 4, 1024));
+    c.twin_seed = static_cast<std::uint64_t>(
+        integer_in(r, "seed", static_cast<long long>(c.twin_seed), 0, (1ll << 62)));
+    r.finish();
+  }
+
+  if (const json div = table(top, "divergence"); !div.empty()) {
+    ObjectReader r(div, "divergence");
+    c.z_threshold = number_in(r, "z_threshold", c.z_threshold, 0.5, 100);
+    c.delta_e_threshold = number_in(r, "delta_e_threshold", c.delta_e_threshold, 0.1, 100);
+    c.sustained_m = static_cast<int>(integer_in(r, "sustained_m", c.sustained_m, 1, 1000));
+    c.sustained_n = static_cast<int>(integer_in(r, "sustained_n", c.sustained_n, 1, 1000));
+    c.reference_drift = number_in(r, "reference_drift", c.reference_drift, 0.001, 1);
+    c.pause_on_sustained = r.optional<bool>("pause_on_sustained", c.pause_on_sustained);
+    r.finish();
+  }
+
+  if (const json hook = table(top, "webhook"); !hook.empty()) {
+    ObjectReader r(hook, "webhook");
+    c.webhook_url = r.optional<std::string>("url", c.webhook_url);
+    c.webhook_retries = static_cast<int>(integer_in(r, "retries", c.webhook_retries, 0, 100));
+    c.webhook_backoff = seconds_in(r, "backoff_s", c.webhook_backoff, 0.01, 3600);
+    c.webhook_timeout = seconds_in(r, "timeout_s", c.webhook_timeout, 0.1, 600);
+    c.webhook_min_severity = r.optional<std::string>("min_severity", c.webhook_min_severity);
+    if (c.webhook_min_severity != "info" && c.webhook_min_severity != "warning" &&
+        c.webhook_min_severity != "critical")
+      throw Error::invalid("webhook.min_severity",
+                           fmt::format("'{}' is not info, warning or critical",
+                                       c.webhook_min_severity));
+    r.finish();
+  }
+
+  top.finish();
+  c.validate();
+  return c;
+}
+
+Config Config::load(const std::string& path, const std::optional<Config>& base) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(Errc::not_found, fmt::format("cannot open config file {}", path), "config");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return parse(ss.str(), path, base);
+}
+
+void Config::validate() const {
+  if (sustained_m > sustained_n)
+    throw Error(Errc::out_of_range,
+                fmt::format("divergence.sustained_m = {} must not exceed divergence.sustained_n "
+                            "= {}",
+                            sustained_m, sustained_n),
+                "divergence.sustained_m");
+  if (!allow_remote)
+    for (std::size_t i = 0; i < listen.size(); ++i)
+      if (!listen[i].loopback())
+        throw Error::invalid(fmt::format("server.listen[{}]", i),
+                             fmt::format("{} is not a loopback address; set "
+                                         "server.allow_remote = true to listen on it",
+                                         listen[i].to_string()));
+  if (!webhook_url.empty()) {
+    if (!webhook_url.starts_with("http://"))
+      throw Error::invalid("webhook.url", fmt::format("'{}' must start with http://", webhook_url));
+  }
+  if (!motion.empty() && !motion.contains("driver"))
+    throw Error::invalid("instrument.motion.driver", "is required");
+}
+
+}  // namespace gonio::daemon

@@ -1,0 +1,63 @@
+// Shared pieces of gonioctl's commands (not a public header).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <iosfwd>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "gonio/daemon/client.hpp"
+
+namespace gonio::daemon::ctl {
+
+struct Options {
+  std::string state_dir;
+  std::string connect;  // unix:PATH or tcp://HOST:PORT; default unix:<state-dir>/goniod.sock
+  std::string token, token_file;
+  bool json = false;
+  double timeout_s = 120;
+};
+
+// Connects on first use; logs in with the token when the transport needs it.
+class Session {
+ public:
+  explicit Session(Options o) : o_(std::move(o)) {}
+  Client& client();
+  nlohmann::json call(const std::string& method, const nlohmann::json& params = nlohmann::json::object()) {
+    return client().call(method, params);
+  }
+  const Options& options() const noexcept { return o_; }
+
+ private:
+  Options o_;
+  std::optional<Client> client_;
+};
+
+std::string default_state_dir();
+
+// Prints a result: JSON (pretty) with --json, else `human`.
+void print(const Options& o, const nlohmann::json& result, const std::function<void()>& human);
+// key: value lines of an object (nested objects flattened with dots).
+void print_fields(const nlohmann::json& obj, const std::string& prefix = {});
+
+// Follows a scan until it completes, fails, is cancelled or paused. Returns the exit code
+// (0 completed, 9 otherwise). Draws a progress bar on a terminal, a line per 10 % elsewhere;
+// NDJSON of every notification with --json.
+int watch_scan(Session& s, std::int64_t scan, bool json_lines);
+
+// The README's main job (see demo.cpp).
+struct DemoOptions {
+  std::string state_dir;    // empty: a fresh temporary directory
+  std::string goniod;       // empty: next to gonioctl
+  std::string output;       // PNG path; empty: <state-dir>/demo.png
+  bool keep_serving = false;
+  double time_scale = 0.02; // the mock's real-time factor for motion (0: as fast as it computes)
+};
+int run_demo(const DemoOptions& d, const Options& o);
+
+}  // namespace gonio::daemon::ctl

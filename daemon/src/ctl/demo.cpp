@@ -1,0 +1,249 @@
+// gonioctl demo — the README's main job, end to end on the mock instrument:
+// start goniod --mock in a fresh state dir, create the glossy demo sample, submit the demo
+// scan (θi = 45°, θr = −80…80° step 2°, 400–700 nm), watch it live, print measured vs
+// predicted with the divergence summary, plot both curves to a PNG (twin plot API), and stop
+// goniod with SIGTERM (or leave it serving).
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "ctl/ctl_internal.hpp"
+#include "gonio/daemon/config.hpp"
+#include "gonio/daemon/ctl.hpp"
+#include "gonio/proto/error.hpp"
+#include "gonio/twin/plot.hpp"
+
+namespace gonio::daemon::ctl {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr const char* kSampleName = "glossy-demo";
+constexpr const char* kGrid = "in=45;out=-80:80:2";
+constexpr const char* kWavelengths = "400:700:10";
+
+fs::path self_dir() {
+  std::error_code ec;
+  const auto exe = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? fs::current_path() : exe.parent_path();
+}
+
+pid_t spawn_goniod(const std::string& exe, const fs::path& dir, const fs::path& config) {
+  const auto log = (dir / "goniod.log").string();
+  const pid_t pid = ::fork();
+  if (pid < 0) throw Error(Errc::io_error, fmt::format("fork: {}", std::strerror(errno)));
+  if (pid == 0) {
+    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0640);
+    if (fd >= 0) {
+      ::dup2(fd, STDOUT_FILENO);
+      ::dup2(fd, STDERR_FILENO);
+    }
+    const std::string state = dir.string(), cfg = config.string();
+    ::execl(exe.c_str(), exe.c_str(), "--state-dir", state.c_str(), "--config", cfg.c_str(), "--mock",
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
+// Waits for goniod's socket; fails early if goniod exits.
+void wait_ready(pid_t pid, const fs::path& dir) {
+  const auto sock = "unix:" + (dir / "goniod.sock").string();
+  for (int i = 0; i < 300; ++i) {
+    int status = 0;
+    if (::waitpid(pid, &status, WNOHANG) == pid)
+      throw Error(Errc::io_error, fmt::format("goniod exited ({}) during start-up; see {}",
+                                              WIFEXITED(status) ? WEXITSTATUS(status) : -1,
+                                              (dir / "goniod.log").string()));
+    try {
+      Client c(sock, std::chrono::seconds(5));
+      c.call("system.info");
+      return;
+    } catch (const std::exception&) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  }
+  throw Error(Errc::timeout, fmt::format("goniod did not answer on {} within 15 s", sock));
+}
+
+int stop_goniod(pid_t pid) {
+  ::kill(pid, SIGTERM);
+  for (int i = 0; i < 600; ++i) {
+    int status = 0;
+    if (::waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ::kill(pid, SIGKILL);
+  ::waitpid(pid, nullptr, 0);
+  return 137;
+}
+
+std::size_t channel_near(const json& wavelengths, double nm) {
+  std::size_t c = 0;
+  for (std::size_t i = 0; i < wavelengths.size(); ++i)
+    if (std::abs(wavelengths[i].get<double>() - nm) < std::abs(wavelengths[c].get<double>() - nm)) c = i;
+  return c;
+}
+
+}  // namespace
+
+int run_demo(const DemoOptions& d, const Options& o) {
+  fs::path dir = d.state_dir;
+  if (dir.empty()) {
+    std::string tmpl = (fs::temp_directory_path() / "gonio-demo-XXXXXX").string();
+    if (!::mkdtemp(tmpl.data())) throw Error(Errc::io_error, fmt::format("mkdtemp: {}", std::strerror(errno)));
+    dir = tmpl;
+  } else {
+    fs::create_directories(dir);
+  }
+  const std::string goniod = d.goniod.empty() ? (self_dir() / "goniod").string() : d.goniod;
+  const fs::path png = d.output.empty() ? dir / "demo.png" : fs::path(d.output);
+
+  // The mock lab: the demo sample is its hidden true sample; motion takes (scaled) real time.
+  const auto config = dir / "demo.toml";
+  {
+    std::ofstream out(config);
+    out << "# goniod configuration of `gonioctl demo`: the mock instrument\n"
+        << "[server]\nlog_level = \"info\"\n\n"
+        << "[instrument.motion]\ndriver = \"mock\"\n"
+        << fmt::format("sample = \"{}\"\n", kDemoSampleBsdf)
+        << fmt::format("time_scale = {}\n\n", d.time_scale)
+        << "[instrument.photometer]\ndriver = \"mock\"\n";
+  }
+  std::cout << fmt::format("demo: starting goniod --mock in {}\n", dir.string());
+  const pid_t pid = spawn_goniod(goniod, dir, config);
+  int code = ctl_exit::ok;
+  try {
+    wait_ready(pid, dir);
+    Options so = o;
+    so.state_dir = dir.string();
+    so.connect = "unix:" + (dir / "goniod.sock").string();
+    Session s(so);
+    const auto info = s.call("system.info");
+    const double z_threshold = info["divergence"]["z_threshold"].get<double>();
+    const double de_threshold = info["divergence"]["delta_e_threshold"].get<double>();
+
+    json sample;
+    try {
+      sample = s.call("sample.get", json{{"sample", kSampleName}});
+    } catch (const RpcError&) {
+      sample = s.call("sample.create", json{{"name", kSampleName},
+                                            {"notes", "glossy orange paint: diffuse base under a clear coat"},
+                                            {"bsdf", kDemoSampleBsdf},
+                                            {"tolerance", 0.02}});
+    }
+    std::cout << fmt::format("demo: sample '{}' (id {}): {}\n", kSampleName, cell(sample["id"]),
+                             cell(sample["bsdf"]));
+    const auto scan = s.call("scan.submit", json{{"sample", kSampleName},
+                                                {"name", "demo: in-plane curve at 45°"},
+                                                {"grids", {kGrid}},
+                                                {"wavelengths", kWavelengths}});
+    const auto id = scan["id"].get<std::int64_t>();
+    std::cout << fmt::format("demo: scan {} queued: {} points, grid '{}', {} nm\n", id,
+                             cell(scan["points_total"]), kGrid, kWavelengths);
+    code = watch_scan(s, id, false);
+
+    // Every point, measured beside predicted.
+    json points = json::array();
+    for (std::size_t offset = 0;;) {
+      const auto page = s.call("scan.points", json{{"scan", id}, {"offset", offset}, {"limit", 1000}});
+      for (const auto& p : page["points"]) points.push_back(p);
+      if (page["next_offset"].is_null()) break;
+      offset = page["next_offset"].get<std::size_t>();
+    }
+    if (points.empty()) throw Error(Errc::internal, "the demo scan stored no point");
+    const auto c = channel_near(points.front()["measured"]["wavelengths_nm"], 550);
+    const double nm = points.front()["measured"]["wavelengths_nm"][c].get<double>();
+    Table t({"θr", fmt::format("β meas {:g} nm", nm), "±u", "β twin", "±se", "max|z|", "ΔE00", ""});
+    std::vector<double> x, ym, um, yp, up, z, de;
+    double z_worst = 0, de_worst = 0, de_sum = 0, tr_z = 0, tr_de = 0;
+    std::size_t n_div = 0, n_de = 0;
+    for (const auto& p : points) {
+      const double tr = p["planned"]["theta_r"].get<double>();
+      const auto& m = p["measured"];
+      x.push_back(tr);
+      ym.push_back(m["values"][c].get<double>());
+      um.push_back(m["std_uncertainty"][c].get<double>());
+      const bool has_pred = !p["predicted"].is_null();
+      yp.push_back(has_pred ? p["predicted"]["values"][c].get<double>() : NAN);
+      up.push_back(has_pred ? p["predicted"]["std_uncertainty"][c].get<double>() : NAN);
+      z.push_back(p["z_max"].is_null() ? NAN : p["z_max"].get<double>());
+      de.push_back(p["delta_e00"].is_null() ? NAN : p["delta_e00"].get<double>());
+      if (std::isfinite(z.back()) && z.back() > z_worst) z_worst = z.back(), tr_z = tr;
+      if (std::isfinite(de.back())) {
+        de_sum += de.back(), ++n_de;
+        if (de.back() > de_worst) de_worst = de.back(), tr_de = tr;
+      }
+      if (p["diverged"].get<bool>()) ++n_div;
+      t.add({fmt::format("{:g}", tr), fmt::format("{:.4g}", ym.back()), fmt::format("{:.2g}", um.back()),
+             has_pred ? fmt::format("{:.4g}", yp.back()) : "-", has_pred ? fmt::format("{:.2g}", up.back()) : "-",
+             std::isfinite(z.back()) ? fmt::format("{:.2f}", z.back()) : "-",
+             std::isfinite(de.back()) ? fmt::format("{:.2f}", de.back()) : "-",
+             p["diverged"].get<bool>() ? "DIVERGED" : ""});
+    }
+    std::cout << "\nmeasured vs predicted (θi = 45°):\n" << t.render();
+    const auto alerts = s.call("alert.list", json{{"scan", id}, {"limit", 1000}});
+    std::cout << fmt::format(
+        "\ndivergence summary: {} of {} points diverge (max |z| > {:g} or ΔE00 > {:g}); worst max|z| "
+        "{:.2f} at θr = {:g}°; ΔE00 mean {:.2f}, worst {:.2f} at θr = {:g}°; {} alert(s)\n",
+        n_div, points.size(), z_threshold, de_threshold, z_worst, tr_z, n_de ? de_sum / static_cast<double>(n_de) : 0.0,
+        de_worst, tr_de, alerts.size());
+    for (const auto& a : alerts)
+      std::cout << fmt::format("  alert {} [{}] {} (×{})\n", cell(a["id"]), cell(a["severity"]),
+                               cell(a["message"]), cell(a["count"]));
+
+    twin::Figure fig;
+    fig.title = fmt::format("gonio demo — scan {}: '{}' at θi = 45°, measured vs twin", id, kSampleName);
+    fig.width = 1000;
+    fig.height = 720;
+    auto& top = fig.panels.emplace_back();
+    top.title = fmt::format("radiance factor at {:g} nm", nm);
+    top.x = twin::Axis("receiving angle θr", "°");
+    top.y = twin::Axis("β").logarithmic();
+    top.height_ratio = 2;
+    auto& meas = top.series.emplace_back("measured (mock instrument) ±u", x, ym, um);
+    meas.line = twin::LineStyle::none;
+    meas.marker = twin::Marker::circle;
+    meas.marker_size = 5;
+    top.series.emplace_back("predicted (twin) ", x, yp);
+    auto& bottom = fig.panels.emplace_back();
+    bottom.title = "divergence per point";
+    bottom.x = twin::Axis("receiving angle θr", "°");
+    bottom.y = twin::Axis("max |z|, ΔE00");
+    auto& zs = bottom.series.emplace_back("max |z|", x, z);
+    zs.marker = twin::Marker::circle;
+    zs.marker_size = 4;
+    auto& ds = bottom.series.emplace_back("ΔE00", x, de);
+    ds.line = twin::LineStyle::dashed;
+    bottom.y_reference_lines = {z_threshold};
+    twin::write_figure(fig, png.string());
+    std::cout << fmt::format("\ndemo: plot written to {}\n", png.string());
+  } catch (...) {
+    if (!d.keep_serving) stop_goniod(pid);
+    throw;
+  }
+  if (d.keep_serving) {
+    std::cout << fmt::format(
+        "demo: goniod (pid {}) keeps serving on unix:{}\n      try: gonioctl --state-dir {} scan list\n"
+        "      stop it with: kill -TERM {}\n",
+        pid, (dir / "goniod.sock").string(), dir.string(), pid);
+    return code;
+  }
+  const int rc = stop_goniod(pid);
+  std::cout << fmt::format("demo: goniod stopped (exit {}); state dir {} kept (store, log, plot)\n", rc,
+                           dir.string());
+  return code != ctl_exit::ok ? code : (rc == 0 ? ctl_exit::ok : ctl_exit::server);
+}
+
+}  // namespace gonio::daemon::ctl

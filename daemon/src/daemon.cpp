@@ -1,0 +1,252 @@
+// goniod start-up, run and shutdown (see daemon.hpp).
+#include "gonio/daemon/daemon.hpp"
+
+#include <sys/stat.h>
+#include <systemd/sd-daemon.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <fstream>
+#include <thread>
+
+#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange without it
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/signal_set.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <boost/asio/thread_pool.hpp>
+#include <fmt/format.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/sinks/systemd_sink.h>
+#include <spdlog/spdlog.h>
+
+#include "gonio/daemon/alerts.hpp"
+#include "gonio/daemon/auth.hpp"
+#include "gonio/daemon/config.hpp"
+#include "gonio/daemon/hub.hpp"
+#include "gonio/daemon/instrument.hpp"
+#include "gonio/daemon/methods.hpp"
+#include "gonio/daemon/net.hpp"
+#include "gonio/daemon/rpc.hpp"
+#include "gonio/daemon/store.hpp"
+#include "gonio/daemon/twin_service.hpp"
+
+#ifndef GONIO_VERSION
+#define GONIO_VERSION "0.0.0"
+#endif
+
+namespace gonio::daemon {
+namespace {
+
+namespace asio = boost::asio;
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+void setup_logging(const std::string& level) {
+  std::shared_ptr<spdlog::logger> logger;
+  // Under systemd stderr goes to the journal anyway; the journal sink keeps the levels.
+  if (std::getenv("JOURNAL_STREAM") || std::getenv("INVOCATION_ID"))
+    logger = std::make_shared<spdlog::logger>(
+        "goniod", std::make_shared<spdlog::sinks::systemd_sink_mt>("goniod"));
+  else
+    logger = std::make_shared<spdlog::logger>(
+        "goniod", std::make_shared<spdlog::sinks::stderr_color_sink_mt>());
+  logger->set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ %v");
+  logger->set_level(spdlog::level::from_str(level));
+  spdlog::set_default_logger(logger);
+}
+
+void write_file_atomic(const fs::path& path, const std::string& text, fs::perms perms) {
+  const auto tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    out << text;
+    if (!out) throw Error(Errc::io_error, fmt::format("cannot write {}", tmp));
+  }
+  fs::permissions(tmp, perms);
+  fs::rename(tmp, path);
+}
+
+Config load_config(const DaemonOptions& o) {
+  std::optional<Config> base;
+  if (o.mock) base = Config::mock_defaults();
+  Config c = o.config_file ? Config::load(*o.config_file, base) : base.value_or(Config{});
+  if (o.mock && c.motion.value("driver", "") != "mock") {
+    // --mock wins over hardware tables in the file: never drive real arms by accident.
+    const auto m = Config::mock_defaults();
+    c.motion = m.motion;
+    c.photometer = m.photometer;
+  }
+  if (!o.listen.empty()) {
+    c.listen.clear();
+    for (std::size_t i = 0; i < o.listen.size(); ++i)
+      c.listen.push_back(ListenUri::parse(o.listen[i], fmt::format("--listen[{}]", i)));
+  }
+  if (o.log_level) c.log_level = *o.log_level;
+  if (c.motion.empty() || c.photometer.empty())
+    throw Error::invalid("instrument", "no instrument configured: pass --mock, or a config file "
+                                       "with [instrument.motion] and [instrument.photometer]");
+  c.validate();
+  return c;
+}
+
+}  // namespace
+
+int run_daemon(const DaemonOptions& o) {
+  Config config;
+  try {
+    config = load_config(o);
+    setup_logging(config.log_level);
+  } catch (const Error& e) {
+    fmt::print(stderr, "goniod: {}\n", e.what());
+    return exit_code::usage;
+  }
+
+  // ---- state dir and store
+  const fs::path state = o.state_dir;
+  std::unique_ptr<Store> store;
+  try {
+    std::error_code ec;
+    fs::create_directories(state, ec);
+    if (ec) throw Error(Errc::io_error, fmt::format("cannot create {}: {}", state.string(), ec.message()));
+    store = std::make_unique<Store>(state / "goniod.db", config.synchronous_full);
+    for (auto id : store->recover_running("goniod was stopped uncleanly during the scan; resumes "
+                                          "at the next unmeasured point"))
+      spdlog::warn("scan {} was running when goniod last stopped; it resumes first", id);
+  } catch (const Error& e) {
+    spdlog::critical("{}", e.what());
+    return exit_code::state;
+  }
+
+  try {
+    Auth auth(config.tokens, *store);
+    if (auth.ensure_admin_token(state / "admin.token"))
+      spdlog::info("wrote a new admin token to {} (mode 0600)", (state / "admin.token").string());
+
+    TwinService twin(config, twin::InstrumentProfile::load(config.profile));
+    Hub hub;
+    AlertService alerts(*store, hub, parse_severity(config.webhook_min_severity, "webhook.min_severity"));
+    Instrument instrument(config, *store, twin, alerts, hub);
+
+    asio::io_context io;
+    asio::thread_pool workers(config.rpc_threads);
+    rpc::Dispatcher dispatcher([&workers](std::function<void()> f) { asio::post(workers, std::move(f)); });
+
+    std::vector<std::shared_ptr<net::Listener>> listeners;
+    Services services{config,     state,     *store,   auth,
+                      hub,        twin,      alerts,   instrument,
+                      &dispatcher, std::chrono::steady_clock::now(), utc::now(),
+                      [&listeners] {
+                        json out = json::array();
+                        for (const auto& l : listeners) out.push_back(l->stats());
+                        return out;
+                      }};
+    register_methods(dispatcher, services);
+
+    // ---- listeners: the state dir's socket always, then the configured ones.
+    const net::Context ctx{dispatcher, hub, auth, net::Limits::from(config)};
+    auto uris = config.listen;
+    const auto default_sock = (state / "goniod.sock").string();
+    if (std::none_of(uris.begin(), uris.end(), [&](const ListenUri& u) {
+          return u.kind == ListenUri::Kind::unix_socket && u.path == default_sock;
+        }))
+      uris.insert(uris.begin(), ListenUri::parse("unix:" + default_sock));
+    try {
+      for (const auto& u : uris) {
+        switch (u.kind) {
+          case ListenUri::Kind::unix_socket: listeners.push_back(net::listen_unix(io, u.path, ctx)); break;
+          case ListenUri::Kind::tcp: listeners.push_back(net::listen_tcp(io, u.host, u.port, ctx)); break;
+          case ListenUri::Kind::http: listeners.push_back(net::listen_http(io, u.host, u.port, ctx)); break;
+        }
+        spdlog::info("listening on {}", listeners.back()->endpoint());
+      }
+    } catch (const Error& e) {
+      spdlog::critical("{}", e.what());
+      return exit_code::listen;
+    }
+    json endpoints = json::array();
+    for (const auto& l : listeners) endpoints.push_back(l->endpoint());
+    write_file_atomic(state / "endpoints.json", json{{"pid", ::getpid()}, {"listen", endpoints}}.dump() + "\n",
+                      fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+
+    if (!config.webhook_url.empty()) {
+      alerts.set_sink(net::make_webhook(io, config));
+      spdlog::info("alerts at or above {} are POSTed to {}", config.webhook_min_severity, config.webhook_url);
+    }
+
+    // ---- instrument (a bad driver table is a usage error)
+    instrument.set_status_listener([](const std::string& s) {
+      sd_notifyf(0, "STATUS=%s", s.c_str());
+    });
+    try {
+      instrument.start();
+    } catch (const Error& e) {
+      spdlog::critical("{}", e.what());
+      for (auto& l : listeners) l->close();
+      return exit_code::usage;
+    }
+    store->audit("goniod", "daemon.start", "", json{{"version", GONIO_VERSION}, {"listen", endpoints}});
+
+    // ---- signals, systemd
+    std::thread stopper;
+    asio::signal_set signals(io, SIGINT, SIGTERM);
+    std::signal(SIGPIPE, SIG_IGN);
+    bool stopping = false;
+    signals.async_wait([&](const boost::system::error_code& ec, int sig) {
+      if (ec || stopping) return;
+      stopping = true;
+      spdlog::info("{}: stopping (finishing the point in progress)", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+      sd_notify(0, "STOPPING=1\nSTATUS=stopping");
+      for (auto& l : listeners) l->close();
+      // Parking the scan may wait for a device; do it off the network threads.
+      stopper = std::thread([&] {
+        instrument.shutdown();
+        io.stop();
+      });
+    });
+    std::uint64_t watchdog_us = 0;
+    asio::steady_timer watchdog(io);
+    std::function<void()> pet;
+    if (sd_watchdog_enabled(0, &watchdog_us) > 0 && watchdog_us > 0) {
+      const auto period = std::chrono::microseconds(watchdog_us / 2);
+      // The runner must be alive too, allowing for the longest device call.
+      const auto stale = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+          std::max({config.move_timeout, config.home_timeout, config.measure_timeout}) +
+          std::chrono::seconds(10));
+      pet = [&, period, stale] {
+        if (std::chrono::steady_clock::now() - instrument.heartbeat() < stale) sd_notify(0, "WATCHDOG=1");
+        else spdlog::error("watchdog: the instrument thread has not run for too long");
+        watchdog.expires_after(period);
+        watchdog.async_wait([&](const boost::system::error_code& ec) {
+          if (!ec) pet();
+        });
+      };
+      pet();
+    }
+    sd_notifyf(0, "READY=1\nSTATUS=ready, listening on %zu endpoint(s)\nMAINPID=%d", listeners.size(),
+               static_cast<int>(::getpid()));
+    spdlog::info("goniod {} ready (state dir {})", GONIO_VERSION, state.string());
+
+    std::vector<std::thread> io_threads;
+    for (int i = 1; i < config.io_threads; ++i) io_threads.emplace_back([&io] { io.run(); });
+    io.run();
+    for (auto& t : io_threads) t.join();
+    if (stopper.joinable()) stopper.join();
+    instrument.shutdown();
+    workers.join();
+    alerts.set_sink(nullptr);
+    store->audit("goniod", "daemon.stop", "", json::object());
+    spdlog::info("goniod stopped cleanly");
+    return exit_code::ok;
+  } catch (const Error& e) {
+    spdlog::critical("{}", e.what());
+    return e.code() == Errc::internal ? exit_code::internal
+           : (e.code() == Errc::io_error ? exit_code::state : exit_code::usage);
+  } catch (const std::exception& e) {
+    spdlog::critical("internal error: {}", e.what());
+    return exit_code::internal;
+  }
+}
+
+}  // namespace gonio::daemon

@@ -1,0 +1,339 @@
+// gonio-load — latency and throughput of goniod under concurrent clients, during a running
+// mock scan, beside a raw loopback echo server measured in the same run (the floor that
+// the machine and the client code set).
+//
+// By default it starts `goniod --mock` in a fresh temporary state dir with a TCP listener on
+// 127.0.0.1, creates a sample and submits a long scan, waits until points are stored, and
+// then, for each target in turn, runs N client threads (one connection each) that send
+// requests back to back for a fixed time:
+//   echo         a line echoed by an in-process epoll server (no JSON-RPC work at all)
+//   system.info  goniod's cheapest method that touches every service
+//   scan.points  a page of 10 stored points of the running scan (SQLite read + JSON)
+// It prints p50 / p99 / max latency, throughput and errors per target, goniod's resident
+// memory and the scan runner's own time per point (excluding motion, photometer and twin).
+// Wall times are measured, never asserted.
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/epoll.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <thread>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "gonio/daemon/client.hpp"
+#include "gonio/daemon/config.hpp"
+#include "gonio/daemon/ctl.hpp"
+
+namespace fs = std::filesystem;
+using gonio::daemon::Client;
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+// A line echo server on 127.0.0.1 (ephemeral port), one epoll thread.
+class EchoServer {
+ public:
+  EchoServer() {
+    listen_fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    a.sin_port = 0;
+    if (::bind(listen_fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || ::listen(listen_fd_, 1024) != 0)
+      throw std::runtime_error(fmt::format("echo server: {}", std::strerror(errno)));
+    socklen_t len = sizeof a;
+    ::getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&a), &len);
+    port_ = ntohs(a.sin_port);
+    ::pipe2(stop_, O_CLOEXEC);
+    thread_ = std::thread([this] { run(); });
+  }
+  ~EchoServer() {
+    (void)!::write(stop_[1], "x", 1);
+    thread_.join();
+    ::close(listen_fd_);
+    ::close(stop_[0]);
+    ::close(stop_[1]);
+  }
+  std::string uri() const { return fmt::format("tcp://127.0.0.1:{}", port_); }
+
+ private:
+  void run() {
+    const int ep = ::epoll_create1(EPOLL_CLOEXEC);
+    epoll_event ev{};
+    ev.events = EPOLLIN;
+    ev.data.fd = listen_fd_;
+    ::epoll_ctl(ep, EPOLL_CTL_ADD, listen_fd_, &ev);
+    ev.data.fd = stop_[0];
+    ::epoll_ctl(ep, EPOLL_CTL_ADD, stop_[0], &ev);
+    std::map<int, std::string> pending;
+    std::vector<epoll_event> events(256);
+    char buf[65536];
+    for (;;) {
+      const int n = ::epoll_wait(ep, events.data(), static_cast<int>(events.size()), -1);
+      for (int i = 0; i < n; ++i) {
+        const int fd = events[static_cast<std::size_t>(i)].data.fd;
+        if (fd == stop_[0]) {
+          for (auto& [c, b] : pending) ::close(c);
+          ::close(ep);
+          return;
+        }
+        if (fd == listen_fd_) {
+          for (;;) {
+            const int c = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
+            if (c < 0) break;
+            epoll_event ce{};
+            ce.events = EPOLLIN;
+            ce.data.fd = c;
+            ::epoll_ctl(ep, EPOLL_CTL_ADD, c, &ce);
+            pending[c];
+          }
+          continue;
+        }
+        const auto r = ::recv(fd, buf, sizeof buf, 0);
+        if (r <= 0) {
+          ::epoll_ctl(ep, EPOLL_CTL_DEL, fd, nullptr);
+          ::close(fd);
+          pending.erase(fd);
+          continue;
+        }
+        auto& b = pending[fd];
+        b.append(buf, static_cast<std::size_t>(r));
+        const auto nl = b.rfind('\n');
+        if (nl == std::string::npos) continue;
+        // The client waits for each answer, so a blocking send of one line is fine.
+        (void)!::send(fd, b.data(), nl + 1, MSG_NOSIGNAL);
+        b.erase(0, nl + 1);
+      }
+    }
+  }
+  int listen_fd_ = -1;
+  int stop_[2]{-1, -1};
+  std::uint16_t port_ = 0;
+  std::thread thread_;
+};
+
+struct Result {
+  std::string target;
+  std::size_t clients = 0, requests = 0, errors = 0;
+  double seconds = 0;
+  std::vector<double> latency_ms;
+};
+
+double quantile(std::vector<double>& v, double q) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
+}
+
+Result run_clients(const std::string& target, const std::string& uri, const std::string& token,
+                   std::size_t clients, double seconds, const std::string& method, const json& params) {
+  Result res;
+  res.target = target;
+  res.clients = clients;
+  std::vector<std::vector<double>> lat(clients);
+  std::vector<std::size_t> errs(clients, 0);
+  std::atomic<std::size_t> ready{0};
+  std::atomic<bool> go{false}, failed_connect{false};
+  std::vector<std::thread> threads;
+  Clock::time_point t_end;
+  for (std::size_t i = 0; i < clients; ++i)
+    threads.emplace_back([&, i] {
+      std::optional<Client> c;
+      try {
+        c.emplace(uri, std::chrono::seconds(10));
+        if (!token.empty()) c->login(token);
+      } catch (const std::exception& e) {
+        std::cerr << "gonio-load: client " << i << ": " << e.what() << "\n";
+        failed_connect = true;
+      }
+      ++ready;
+      while (!go.load()) std::this_thread::yield();
+      if (!c) return;
+      lat[i].reserve(100000);
+      while (Clock::now() < t_end) {
+        const auto t0 = Clock::now();
+        try {
+          c->call(method, params);
+          lat[i].push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+        } catch (const std::exception&) {
+          ++errs[i];
+          if (errs[i] > 1000) break;
+        }
+      }
+    });
+  while (ready.load() < clients) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const auto t0 = Clock::now();
+  t_end = t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+  go = true;
+  for (auto& t : threads) t.join();
+  res.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  for (std::size_t i = 0; i < clients; ++i) {
+    res.latency_ms.insert(res.latency_ms.end(), lat[i].begin(), lat[i].end());
+    res.errors += errs[i];
+  }
+  res.requests = res.latency_ms.size();
+  if (failed_connect) res.errors += 1;
+  return res;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"gonio-load — goniod latency and throughput beside a loopback echo baseline"};
+  std::string goniod, connect, token, token_file;
+  std::size_t clients = 64;
+  double seconds = 5, time_scale = 1;
+  bool as_json = false;
+  app.add_option("--goniod", goniod, "goniod to start (default: next to gonio-load)");
+  app.add_option("--connect", connect, "measure a running goniod at tcp://HOST:PORT instead");
+  app.add_option("--token", token, "bearer token for --connect");
+  app.add_option("--token-file", token_file, "file with the token for --connect");
+  app.add_option("--clients", clients, "concurrent clients")->check(CLI::Range(1, 1024));
+  app.add_option("--seconds", seconds, "duration of each target")->check(CLI::Range(0.2, 3600.0));
+  app.add_option("--time-scale", time_scale, "the mock's real-time factor (keeps the scan running)");
+  app.add_flag("--json", as_json, "print the figures as JSON");
+  CLI11_PARSE(app, argc, argv);
+
+  pid_t child = -1;
+  fs::path dir;
+  const auto cleanup = [&] {
+    if (child > 0) {
+      ::kill(child, SIGTERM);
+      ::waitpid(child, nullptr, 0);
+      child = -1;
+    }
+  };
+  try {
+    std::string uri = connect;
+    if (uri.empty()) {
+      std::string tmpl = (fs::temp_directory_path() / "gonio-load-XXXXXX").string();
+      if (!::mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed");
+      dir = tmpl;
+      if (goniod.empty()) goniod = (fs::read_symlink("/proc/self/exe").parent_path() / "goniod").string();
+      {
+        std::ofstream cfg(dir / "load.toml");
+        cfg << "[server]\nlog_level = \"warn\"\nlisten = [\"tcp://127.0.0.1:0\"]\n"
+            << "max_connections = 4096\n\n[instrument.motion]\ndriver = \"mock\"\n"
+            << fmt::format("sample = \"{}\"\ntime_scale = {}\n\n", gonio::daemon::kDemoSampleBsdf, time_scale)
+            << "[instrument.photometer]\ndriver = \"mock\"\n";
+      }
+      child = ::fork();
+      if (child == 0) {
+        const int fd = ::open((dir / "goniod.log").c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0640);
+        if (fd >= 0) ::dup2(fd, STDERR_FILENO), ::dup2(fd, STDOUT_FILENO);
+        const auto state = dir.string(), cfg = (dir / "load.toml").string();
+        ::execl(goniod.c_str(), goniod.c_str(), "--state-dir", state.c_str(), "--config", cfg.c_str(), "--mock",
+                static_cast<char*>(nullptr));
+        ::_exit(127);
+      }
+      for (int i = 0; i < 300 && uri.empty(); ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+        std::ifstream in(dir / "endpoints.json");
+        const auto ep = json::parse(in, nullptr, false);
+        if (ep.is_object())
+          for (const auto& l : ep["listen"])
+            if (l.get<std::string>().starts_with("tcp://")) uri = l.get<std::string>();
+      }
+      if (uri.empty()) throw std::runtime_error("goniod did not start; see " + (dir / "goniod.log").string());
+      std::ifstream tok(dir / "admin.token");
+      std::getline(tok, token);
+    } else if (token.empty() && !token_file.empty()) {
+      std::ifstream tok(token_file);
+      std::getline(tok, token);
+    }
+
+    Client admin(uri, std::chrono::seconds(30));
+    if (!token.empty()) admin.login(token);
+    std::int64_t scan = 0;
+    if (!dir.empty()) {
+      admin.call("sample.create", json{{"name", "load"}, {"bsdf", gonio::daemon::kDemoSampleBsdf}});
+      const auto s = admin.call("scan.submit", json{{"sample", "load"},
+                                                   {"grids", {"in=15,30,45,60;out=-80:80:1"}},
+                                                   {"repeats", 2}});
+      scan = s["id"].get<std::int64_t>();
+      // Wait until the scan runs and has points to page through.
+      for (int i = 0; i < 600; ++i) {
+        const auto sc = admin.call("scan.get", json{{"scan", scan}});
+        if (sc["points_done"].get<std::size_t>() >= 10) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      }
+    } else {
+      const auto list = admin.call("scan.list", json{{"limit", 1}});
+      if (!list.empty()) scan = list[0]["id"].get<std::int64_t>();
+    }
+
+    std::vector<Result> results;
+    {
+      EchoServer echo;
+      results.push_back(run_clients("echo (baseline)", echo.uri(), "", clients, seconds, "system.info", json::object()));
+    }
+    const auto before = admin.call("system.info");
+    results.push_back(run_clients("system.info", uri, token, clients, seconds, "system.info", json::object()));
+    if (scan)
+      results.push_back(run_clients("scan.points", uri, token, clients, seconds, "scan.points",
+                                    json{{"scan", scan}, {"offset", 0}, {"limit", 10}}));
+    const auto after = admin.call("system.info");
+    const auto sc = scan ? admin.call("scan.get", json{{"scan", scan}}) : json(nullptr);
+
+    json out = json::array();
+    gonio::daemon::Table t({"target", "clients", "requests", "req/s", "p50 ms", "p99 ms", "max ms", "errors"});
+    for (auto& r : results) {
+      const double p50 = quantile(r.latency_ms, 0.5), p99 = quantile(r.latency_ms, 0.99);
+      const double mx = r.latency_ms.empty() ? NAN : r.latency_ms.back();
+      const double rps = static_cast<double>(r.requests) / r.seconds;
+      t.add({r.target, std::to_string(r.clients), std::to_string(r.requests), fmt::format("{:.0f}", rps),
+             fmt::format("{:.3f}", p50), fmt::format("{:.3f}", p99), fmt::format("{:.3f}", mx),
+             std::to_string(r.errors)});
+      out.push_back(json{{"target", r.target}, {"clients", r.clients}, {"requests", r.requests},
+                         {"throughput_rps", rps}, {"p50_ms", p50}, {"p99_ms", p99}, {"max_ms", mx},
+                         {"errors", r.errors}});
+    }
+    const auto& runner = after["runner"];
+    const double rss_mib = after["rss_bytes"].get<double>() / (1024.0 * 1024.0);
+    if (as_json) {
+      std::cout << json{{"results", out},
+                        {"goniod_rss_mib", rss_mib},
+                        {"runner", runner},
+                        {"scan", sc},
+                        {"points_during_run", after["runner"]["points_measured"].get<std::int64_t>() -
+                                                  before["runner"]["points_measured"].get<std::int64_t>()}}
+                       .dump(2)
+                << "\n";
+    } else {
+      std::cout << t.render();
+      std::cout << fmt::format(
+          "goniod: rss {:.1f} MiB; scan {} {} with {} points measured during the run; runner's own time "
+          "per point p50 {} ms, p99 {} ms, max {} ms (last {} points)\n",
+          rss_mib, scan, sc.is_null() ? "-" : gonio::daemon::cell(sc["state"]),
+          after["runner"]["points_measured"].get<std::int64_t>() - before["runner"]["points_measured"].get<std::int64_t>(),
+          gonio::daemon::cell(runner["overhead_ms_p50"]), gonio::daemon::cell(runner["overhead_ms_p99"]),
+          gonio::daemon::cell(runner["overhead_ms_max"]), gonio::daemon::cell(runner["overhead_window"]));
+    }
+    cleanup();
+    if (!dir.empty()) {
+      std::error_code ec;
+      fs::remove_all(dir, ec);
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "gonio-load: " << e.what() << "\n";
+    cleanup();
+    return 1;
+  }
+}

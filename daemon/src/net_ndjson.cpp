@@ -1,0 +1,408 @@
+// NDJSON transports over a Unix socket and TCP (Boost.Asio), see net.hpp.
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+
+#include <array>
+#include <atomic>
+#include <deque>
+#include <filesystem>
+#include <mutex>
+
+#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange without it
+
+#include <boost/asio/buffer.hpp>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/local/stream_protocol.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <boost/asio/strand.hpp>
+#include <boost/asio/write.hpp>
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "gonio/daemon/net.hpp"
+
+namespace gonio::daemon::net {
+
+namespace asio = boost::asio;
+using boost::system::error_code;
+using Clock = std::chrono::steady_clock;
+using nlohmann::json;
+
+Limits Limits::from(const Config& c) {
+  Limits l;
+  l.max_message_bytes = c.max_message_bytes;
+  l.read_timeout = c.read_timeout;
+  l.idle_timeout = c.idle_timeout;
+  l.max_queue = c.max_queue;
+  l.max_connections = c.max_connections;
+  return l;
+}
+
+namespace {
+
+// What the sessions of one listener share with it.
+struct ListenerState {
+  Context ctx;
+  std::string kind;  // "unix", "tcp"
+  std::atomic<std::size_t> connections{0}, accepted{0}, dropped{0};
+  std::mutex mu;
+  std::vector<std::weak_ptr<rpc::Session>> sessions;
+  explicit ListenerState(const Context& c, std::string k) : ctx(c), kind(std::move(k)) {}
+};
+
+template <class Protocol>
+class NdjsonSession final : public rpc::Session,
+                            public std::enable_shared_from_this<NdjsonSession<Protocol>> {
+ public:
+  using Socket = typename Protocol::socket;
+
+  NdjsonSession(Socket socket, std::string peer, std::shared_ptr<ListenerState> ls)
+      : rpc::Session(ls->kind, std::move(peer), true), socket_(std::move(socket)),
+        timer_(socket_.get_executor()), ls_(std::move(ls)), limits_(ls_->ctx.limits) {}
+
+  ~NdjsonSession() override { --ls_->connections; }
+
+  void start() {
+    last_activity_ = Clock::now();
+    arm_timer();
+    do_read();
+  }
+
+  bool push(std::shared_ptr<const std::string> message) override {
+    if (closing_.load()) return false;
+    if (queued_.fetch_add(1) + 1 > limits_.max_queue) {
+      --queued_;
+      ++ls_->dropped;
+      asio::post(socket_.get_executor(), [self = this->shared_from_this()] {
+        self->close("its outgoing queue is full (the peer does not read)");
+      });
+      return false;
+    }
+    asio::post(socket_.get_executor(), [self = this->shared_from_this(), m = std::move(message)] {
+      self->enqueue(m);
+    });
+    return true;
+  }
+
+  void shutdown() {
+    asio::post(socket_.get_executor(), [self = this->shared_from_this()] { self->close("the server is stopping"); });
+  }
+
+ private:
+  void do_read() {
+    if (reading_ || closed_ || close_after_write_) return;
+    if (in_flight_ >= limits_.max_in_flight) return;  // resumed when replies come back
+    reading_ = true;
+    socket_.async_read_some(asio::buffer(chunk_), [self = this->shared_from_this()](
+                                                      const error_code& ec, std::size_t n) {
+      self->reading_ = false;
+      self->on_read(ec, n);
+    });
+  }
+
+  void on_read(const error_code& ec, std::size_t n) {
+    if (closed_) return;
+    if (ec) {
+      close(ec == asio::error::eof ? "" : ec.message());
+      return;
+    }
+    last_activity_ = Clock::now();
+    if (buffer_.empty() && n > 0) partial_since_ = last_activity_;
+    buffer_.append(chunk_.data(), n);
+    std::size_t start = 0;
+    for (;;) {
+      const auto nl = buffer_.find('\n', start);
+      if (nl == std::string::npos) break;
+      std::string_view line(buffer_.data() + start, nl - start);
+      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+      if (line.size() > limits_.max_message_bytes) {
+        too_large();
+        return;
+      }
+      if (line.find_first_not_of(" \t") != std::string_view::npos) dispatch(std::string(line));
+      start = nl + 1;
+    }
+    buffer_.erase(0, start);
+    if (buffer_.size() > limits_.max_message_bytes) {
+      too_large();
+      return;
+    }
+    if (!buffer_.empty() && start > 0) partial_since_ = Clock::now();
+    arm_timer();
+    do_read();
+  }
+
+  void too_large() {
+    spdlog::warn("{} {}: message larger than {} bytes; closing", transport(), peer(),
+                 limits_.max_message_bytes);
+    buffer_.clear();
+    enqueue(std::make_shared<const std::string>(
+        json{{"jsonrpc", "2.0"},
+             {"error", rpc::error_object(rpc::code::invalid_request,
+                                         fmt::format("message exceeds the limit of {} bytes",
+                                                     limits_.max_message_bytes),
+                                         Errc::out_of_range)},
+             {"id", nullptr}}
+            .dump()));
+    close_after_write_ = true;
+    if (!writing_) close("");
+  }
+
+  void dispatch(std::string line) {
+    ++in_flight_;
+    ls_->ctx.dispatcher.handle(line, this->shared_from_this(),
+                               [self = this->shared_from_this()](std::string response) {
+                                 asio::post(self->socket_.get_executor(),
+                                            [self, r = std::move(response)]() mutable {
+                                              --self->in_flight_;
+                                              if (!r.empty())
+                                                self->enqueue(std::make_shared<const std::string>(std::move(r)), false);
+                                              self->do_read();
+                                            });
+                               });
+  }
+
+  // On the strand. `counted` says whether push() already counted the message.
+  void enqueue(std::shared_ptr<const std::string> m, bool counted = true) {
+    if (closed_) {
+      if (counted) --queued_;
+      return;
+    }
+    if (!counted) {
+      if (queued_.fetch_add(1) + 1 > limits_.max_queue + limits_.max_in_flight) {
+        --queued_;
+        close("its outgoing queue is full (the peer does not read)");
+        return;
+      }
+    }
+    out_.push_back(std::move(m));
+    do_write();
+  }
+
+  void do_write() {
+    if (writing_ || out_.empty() || closed_) return;
+    writing_ = true;
+    std::array<asio::const_buffer, 2> bufs{asio::buffer(*out_.front()), asio::buffer("\n", 1)};
+    asio::async_write(socket_, bufs, [self = this->shared_from_this()](const error_code& ec, std::size_t) {
+      self->writing_ = false;
+      if (self->closed_) return;
+      self->out_.pop_front();
+      --self->queued_;
+      if (ec) {
+        self->close(ec.message());
+        return;
+      }
+      if (self->out_.empty() && self->close_after_write_) {
+        self->close("");
+        return;
+      }
+      self->do_write();
+    });
+  }
+
+  // One timer: a started message must complete within read_timeout; an idle connection
+  // lives idle_timeout (0: forever).
+  void arm_timer() {
+    if (closed_) return;
+    std::optional<Clock::time_point> deadline;
+    if (!buffer_.empty()) deadline = partial_since_ + limits_.read_timeout;
+    else if (limits_.idle_timeout.count() > 0) deadline = last_activity_ + limits_.idle_timeout;
+    if (!deadline) {
+      timer_.cancel();
+      return;
+    }
+    deadline_ = *deadline;
+    timer_.expires_at(*deadline);
+    timer_.async_wait([self = this->shared_from_this()](const error_code& ec) {
+      if (ec || self->closed_) return;
+      if (Clock::now() < self->deadline_) return;  // re-armed meanwhile
+      self->close(self->buffer_.empty() ? "idle timeout" : "read timeout (message never completed)");
+    });
+  }
+
+  void close(const std::string& why) {
+    if (closed_) return;
+    closed_ = true;
+    closing_ = true;
+    if (!why.empty()) {
+      ++ls_->dropped;
+      spdlog::info("{} {}: closing: {}", transport(), peer(), why);
+    }
+    error_code ignored;
+    timer_.cancel();
+    socket_.shutdown(Socket::shutdown_both, ignored);
+    socket_.close(ignored);
+    ls_->ctx.hub.remove(id());
+  }
+
+  Socket socket_;
+  asio::steady_timer timer_;
+  std::shared_ptr<ListenerState> ls_;
+  Limits limits_;
+  std::array<char, 16384> chunk_{};
+  std::string buffer_;
+  std::deque<std::shared_ptr<const std::string>> out_;
+  std::atomic<std::size_t> queued_{0};
+  std::atomic<bool> closing_{false};
+  bool reading_ = false, writing_ = false, closed_ = false, close_after_write_ = false;
+  std::size_t in_flight_ = 0;
+  Clock::time_point partial_since_, last_activity_, deadline_;
+};
+
+template <class Protocol>
+class NdjsonListener final : public Listener,
+                             public std::enable_shared_from_this<NdjsonListener<Protocol>> {
+ public:
+  using Acceptor = typename Protocol::acceptor;
+
+  NdjsonListener(asio::io_context& io, Acceptor acceptor, std::string endpoint,
+                 std::shared_ptr<ListenerState> ls)
+      : io_(io), acceptor_(std::move(acceptor)), endpoint_(std::move(endpoint)), ls_(std::move(ls)) {}
+
+  void accept() {
+    acceptor_.async_accept(asio::make_strand(io_), [self = this->shared_from_this()](
+                                                       const error_code& ec,
+                                                       typename Protocol::socket socket) {
+      if (ec) {
+        if (ec != asio::error::operation_aborted) {
+          spdlog::warn("{}: accept: {}", self->endpoint_, ec.message());
+          self->accept();
+        }
+        return;
+      }
+      self->on_accept(std::move(socket));
+      self->accept();
+    });
+  }
+
+  std::string endpoint() const override { return endpoint_; }
+
+  void close() override {
+    asio::post(acceptor_.get_executor(), [self = this->shared_from_this()] {
+      error_code ignored;
+      self->acceptor_.close(ignored);
+    });
+    std::vector<std::weak_ptr<rpc::Session>> sessions;
+    {
+      std::lock_guard lock(ls_->mu);
+      sessions.swap(ls_->sessions);
+    }
+    for (auto& w : sessions)
+      if (auto s = w.lock()) std::static_pointer_cast<NdjsonSession<Protocol>>(s)->shutdown();
+  }
+
+  json stats() const override {
+    return json{{"endpoint", endpoint_},
+                {"connections", ls_->connections.load()},
+                {"accepted", ls_->accepted.load()},
+                {"dropped", ls_->dropped.load()}};
+  }
+
+ private:
+  void on_accept(typename Protocol::socket socket) {
+    ++ls_->accepted;
+    if (ls_->connections.load() >= ls_->ctx.limits.max_connections) {
+      ++ls_->dropped;
+      const auto msg = std::make_shared<std::string>(
+          json{{"jsonrpc", "2.0"},
+               {"error", rpc::error_object(rpc::code::overloaded,
+                                           fmt::format("too many connections (limit {})",
+                                                       ls_->ctx.limits.max_connections),
+                                           Errc::busy)},
+               {"id", nullptr}}
+              .dump() +
+          "\n");
+      auto sock = std::make_shared<typename Protocol::socket>(std::move(socket));
+      asio::async_write(*sock, asio::buffer(*msg), [sock, msg](const error_code&, std::size_t) {
+        error_code ignored;
+        sock->close(ignored);
+      });
+      return;
+    }
+    ++ls_->connections;
+    std::string peer;
+    Principal principal;
+    principal.transport = ls_->kind;
+    if constexpr (std::is_same_v<Protocol, asio::local::stream_protocol>) {
+      ucred cred{};
+      socklen_t len = sizeof cred;
+      if (getsockopt(socket.native_handle(), SOL_SOCKET, SO_PEERCRED, &cred, &len) == 0)
+        peer = fmt::format("uid={} pid={}", cred.uid, cred.pid);
+      // The socket's file mode is the local gate: whoever can open it is trusted.
+      principal.name = fmt::format("unix:uid={}", cred.uid);
+      principal.role = Role::admin;
+    } else {
+      error_code ec;
+      const auto ep = socket.remote_endpoint(ec);
+      peer = ec ? "?" : fmt::format("{}:{}", ep.address().to_string(), ep.port());
+      principal.name = "anonymous";
+      principal.role = Role::none;
+    }
+    auto session = std::make_shared<NdjsonSession<Protocol>>(std::move(socket), peer, ls_);
+    session->set_principal(principal);
+    {
+      std::lock_guard lock(ls_->mu);
+      std::erase_if(ls_->sessions, [](const auto& w) { return w.expired(); });
+      ls_->sessions.push_back(session);
+    }
+    session->start();
+  }
+
+  asio::io_context& io_;
+  Acceptor acceptor_;
+  std::string endpoint_;
+  std::shared_ptr<ListenerState> ls_;
+};
+
+}  // namespace
+
+std::shared_ptr<Listener> listen_unix(asio::io_context& io, const std::string& path,
+                                      const Context& ctx) {
+  using P = asio::local::stream_protocol;
+  namespace fs = std::filesystem;
+  std::error_code fec;
+  if (fs::is_socket(fs::symlink_status(path, fec))) fs::remove(path, fec);  // stale, from a crash
+  P::acceptor acceptor(io);
+  error_code ec;
+  acceptor.open(P(), ec);
+  // Created 0660 from the start (no window in which others could connect).
+  const mode_t old = ::umask(0117);
+  if (!ec) acceptor.bind(P::endpoint(path), ec);
+  ::umask(old);
+  if (!ec) acceptor.listen(asio::socket_base::max_listen_connections, ec);
+  if (ec) throw Error(Errc::io_error, fmt::format("cannot listen on unix:{}: {}", path, ec.message()));
+  ::chmod(path.c_str(), 0660);
+  auto ls = std::make_shared<ListenerState>(ctx, "unix");
+  auto l = std::make_shared<NdjsonListener<P>>(io, std::move(acceptor), "unix:" + path, ls);
+  l->accept();
+  return l;
+}
+
+std::shared_ptr<Listener> listen_tcp(asio::io_context& io, const std::string& host,
+                                     std::uint16_t port, const Context& ctx) {
+  using P = asio::ip::tcp;
+  error_code ec;
+  const auto addr = asio::ip::make_address(host == "localhost" ? "127.0.0.1" : host, ec);
+  if (ec) throw Error(Errc::invalid_argument, fmt::format("tcp://{}: {}", host, ec.message()));
+  P::acceptor acceptor(io);
+  const P::endpoint ep(addr, port);
+  acceptor.open(ep.protocol(), ec);
+  if (!ec) acceptor.set_option(asio::socket_base::reuse_address(true), ec);
+  if (!ec) acceptor.bind(ep, ec);
+  if (!ec) acceptor.listen(asio::socket_base::max_listen_connections, ec);
+  if (ec)
+    throw Error(Errc::io_error,
+                fmt::format("cannot listen on tcp://{}:{}: {}", host, port, ec.message()));
+  const auto bound = acceptor.local_endpoint();
+  const auto a = bound.address().to_string();
+  const auto name = fmt::format("tcp://{}:{}", bound.address().is_v6() ? "[" + a + "]" : a, bound.port());
+  auto ls = std::make_shared<ListenerState>(ctx, "tcp");
+  auto l = std::make_shared<NdjsonListener<P>>(io, std::move(acceptor), name, ls);
+  l->accept();
+  return l;
+}
+
+}  // namespace gonio::daemon::net

@@ -1,0 +1,52 @@
+// Alerts: what the divergence monitor and the instrument raise for people to look at.
+//
+// An alert has a kind, a severity and a deduplication key: while an alert with the same
+// key is unacknowledged, a repeat only bumps its count and last_at (one alert per cause,
+// not one per point). A technician acknowledges it; the next occurrence opens a new one.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include <nlohmann/json_fwd.hpp>
+
+namespace gonio {
+
+enum class Severity { info, warning, critical };
+std::string_view to_string(Severity s) noexcept;
+// Throws Error(invalid_argument) naming `field` and listing the severities.
+Severity parse_severity(std::string_view text, std::string_view field = "severity");
+
+// Stable alert kinds.
+namespace alert_kind {
+inline constexpr std::string_view divergence = "divergence";            // a point diverged
+inline constexpr std::string_view sustained = "sustained_divergence";   // m of the last n
+inline constexpr std::string_view reference_drift = "reference_drift";  // instrument health
+inline constexpr std::string_view device_fault = "device_fault";        // scan paused by a fault
+inline constexpr std::string_view scan_failed = "scan_failed";
+}  // namespace alert_kind
+
+struct Alert {
+  std::int64_t id = 0;
+  std::string kind;
+  Severity severity = Severity::warning;
+  std::string dedup_key;
+  std::optional<std::int64_t> scan_id;
+  std::optional<std::int64_t> sample_id;
+  std::optional<std::int64_t> point_index;  // the latest point concerned
+  std::string message;
+  std::string first_at, last_at;  // UTC ISO-8601
+  std::int64_t count = 1;
+  bool acknowledged = false;
+  std::string acknowledged_by;
+  std::optional<std::string> acknowledged_at;
+
+  friend bool operator==(const Alert&, const Alert&) = default;
+};
+
+void to_json(nlohmann::json& j, const Alert& a);
+void from_json(const nlohmann::json& j, Alert& a);
+
+}  // namespace gonio

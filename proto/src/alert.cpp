@@ -1,0 +1,85 @@
+// Alert JSON and severities (see alert.hpp).
+#include "gonio/proto/alert.hpp"
+
+#include <array>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "gonio/proto/error.hpp"
+#include "gonio/proto/json_util.hpp"
+
+namespace gonio {
+namespace {
+
+constexpr std::array<std::pair<Severity, std::string_view>, 3> kSeverities{{
+    {Severity::info, "info"},
+    {Severity::warning, "warning"},
+    {Severity::critical, "critical"},
+}};
+
+template <typename T>
+nlohmann::json opt(const std::optional<T>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
+
+template <typename T>
+std::optional<T> read_opt(json_util::ObjectReader& r, const std::string& key) {
+  const auto* v = r.raw(key);
+  if (!v || v->is_null()) return std::nullopt;
+  return json_util::get_as<T>(*v, key);
+}
+
+}  // namespace
+
+std::string_view to_string(Severity s) noexcept {
+  for (const auto& [sev, name] : kSeverities)
+    if (sev == s) return name;
+  return "warning";
+}
+
+Severity parse_severity(std::string_view text, std::string_view field) {
+  for (const auto& [sev, name] : kSeverities)
+    if (name == text) return sev;
+  throw Error::invalid(std::string(field),
+                       fmt::format("'{}' is not a severity (allowed: info, warning, critical)",
+                                   text));
+}
+
+void to_json(nlohmann::json& j, const Alert& a) {
+  j = nlohmann::json{{"id", a.id},
+                     {"kind", a.kind},
+                     {"severity", to_string(a.severity)},
+                     {"dedup_key", a.dedup_key},
+                     {"scan_id", opt(a.scan_id)},
+                     {"sample_id", opt(a.sample_id)},
+                     {"point_index", opt(a.point_index)},
+                     {"message", a.message},
+                     {"first_at", a.first_at},
+                     {"last_at", a.last_at},
+                     {"count", a.count},
+                     {"acknowledged", a.acknowledged},
+                     {"acknowledged_by", a.acknowledged_by},
+                     {"acknowledged_at", opt(a.acknowledged_at)}};
+}
+
+void from_json(const nlohmann::json& j, Alert& a) {
+  json_util::ObjectReader r(j, "");
+  a.id = r.required<std::int64_t>("id");
+  a.kind = r.required<std::string>("kind");
+  a.severity = parse_severity(r.required<std::string>("severity"), "severity");
+  a.dedup_key = r.optional<std::string>("dedup_key", "");
+  a.scan_id = read_opt<std::int64_t>(r, "scan_id");
+  a.sample_id = read_opt<std::int64_t>(r, "sample_id");
+  a.point_index = read_opt<std::int64_t>(r, "point_index");
+  a.message = r.required<std::string>("message");
+  a.first_at = r.required<std::string>("first_at");
+  a.last_at = r.optional<std::string>("last_at", a.first_at);
+  a.count = r.optional<std::int64_t>("count", 1);
+  a.acknowledged = r.optional<bool>("acknowledged", false);
+  a.acknowledged_by = r.optional<std::string>("acknowledged_by", "");
+  a.acknowledged_at = read_opt<std::string>(r, "acknowledged_at");
+  r.finish();
+}
+
+}  // namespace gonio
