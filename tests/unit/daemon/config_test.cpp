@@ -1,0 +1,127 @@
+// goniod configuration: every key validated, unknown keys rejected, examples parse.
+#include <gtest/gtest.h>
+
+#include "gonio/daemon/config.hpp"
+#include "gonio/drivers/modbus/modbus_motion.hpp"
+#include "gonio/proto/error.hpp"
+
+namespace gonio::daemon {
+namespace {
+
+std::string field_of(std::string_view toml) {
+  try {
+    (void)Config::parse(toml, "test.toml");
+  } catch (const Error& e) {
+    return e.field();
+  }
+  return "<no error>";
+}
+
+TEST(Config, DefaultsWhenEmpty) {
+  const auto c = Config::parse("", "empty.toml");
+  EXPECT_TRUE(c.listen.empty());
+  EXPECT_DOUBLE_EQ(c.z_threshold, 5.0);
+  EXPECT_EQ(c.read_timeout, std::chrono::milliseconds(10000));
+  EXPECT_TRUE(c.synchronous_full);
+}
+
+TEST(Config, ReadsEveryTable) {
+  const auto c = Config::parse(R"(
+[server]
+listen = ["tcp://127.0.0.1:7700", "http://[::1]:0", "unix:/run/x.sock"]
+read_timeout_s = 0.5
+max_queue = 8
+[store]
+synchronous = "normal"
+[instrument]
+move_timeout_s = 2
+[instrument.limits]
+incidence = [0, 70]
+min_separation = 4
+[instrument.motion]
+driver = "mock"
+time_scale = 0.5
+[instrument.photometer]
+driver = "mock"
+[divergence]
+z_threshold = 3
+sustained_m = 2
+sustained_n = 4
+[[auth.token]]
+name = "v"
+role = "viewer"
+sha256 = "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+[webhook]
+url = "http://127.0.0.1:9/hook"
+backoff_s = 0.05
+)",
+                               "full.toml");
+  ASSERT_EQ(c.listen.size(), 3u);
+  EXPECT_EQ(c.listen[0].kind, ListenUri::Kind::tcp);
+  EXPECT_EQ(c.listen[0].port, 7700);
+  EXPECT_EQ(c.listen[1].host, "::1");
+  EXPECT_EQ(c.listen[1].to_string(), "http://[::1]:0");
+  EXPECT_EQ(c.listen[2].path, "/run/x.sock");
+  EXPECT_EQ(c.read_timeout, std::chrono::milliseconds(500));
+  EXPECT_EQ(c.max_queue, 8u);
+  EXPECT_FALSE(c.synchronous_full);
+  EXPECT_EQ(c.move_timeout, std::chrono::milliseconds(2000));
+  EXPECT_DOUBLE_EQ(c.limits.incidence_max, 70);
+  EXPECT_DOUBLE_EQ(c.limits.min_separation.value(), 4);
+  EXPECT_EQ(c.motion["time_scale"], 0.5);
+  EXPECT_EQ(c.sustained_m, 2);
+  ASSERT_EQ(c.tokens.size(), 1u);
+  EXPECT_EQ(c.tokens[0].role, Role::viewer);
+  EXPECT_EQ(c.webhook_backoff, std::chrono::milliseconds(50));
+}
+
+TEST(Config, RejectsUnknownKeysAndBadValuesNamingThem) {
+  EXPECT_EQ(field_of("[server]\nlisten_on = []\n"), "server.listen_on");
+  EXPECT_EQ(field_of("[serv]\n"), "serv");
+  EXPECT_EQ(field_of("[server]\nio_threads = 0\n"), "server.io_threads");
+  EXPECT_EQ(field_of("[server]\nlisten = [\"ftp://x:1\"]\n"), "server.listen[0]");
+  EXPECT_EQ(field_of("[server]\nlisten = [\"tcp://192.168.1.4:7700\"]\n"), "server.listen[0]");
+  EXPECT_EQ(field_of("[server]\nlog_level = \"chatty\"\n"), "server.log_level");
+  EXPECT_EQ(field_of("[divergence]\nz_threshold = 0\n"), "divergence.z_threshold");
+  EXPECT_EQ(field_of("[divergence]\nsustained_m = 6\nsustained_n = 5\n"), "divergence.sustained_m");
+  EXPECT_EQ(field_of("[instrument.limits]\nreceive = [10, -10]\n"), "instrument.limits.receive[1]");
+  EXPECT_EQ(field_of("[instrument]\nmotion = { port = 3 }\n"), "instrument.motion");
+  EXPECT_EQ(field_of("[[auth.token]]\nname = \"x\"\nrole = \"root\"\nsha256 = \"\"\n"), "auth.token[0].role");
+  EXPECT_EQ(field_of("[[auth.token]]\nname = \"x\"\nrole = \"admin\"\nsha256 = \"abc\"\n"),
+            "auth.token[0].sha256");
+  EXPECT_EQ(field_of("[webhook]\nurl = \"https://x/\"\n"), "webhook.url");
+  EXPECT_EQ(field_of("[store]\nsynchronous = \"sometimes\"\n"), "store.synchronous");
+  EXPECT_EQ(field_of("server = 3\n"), "server");
+  EXPECT_EQ(field_of("[server\n"), "config");  // TOML syntax error
+}
+
+TEST(Config, RemoteListenNeedsOptIn) {
+  const auto c = Config::parse("[server]\nallow_remote = true\nlisten = [\"tcp://0.0.0.0:7700\"]\n");
+  EXPECT_FALSE(c.listen[0].loopback());
+  EXPECT_TRUE(ListenUri::parse("tcp://127.0.0.2:1").loopback());
+  EXPECT_TRUE(ListenUri::parse("unix:/x").loopback());
+}
+
+TEST(Config, ExamplesParseAndTheirDriverTablesAreValid) {
+  const auto mock = Config::load(GONIO_SOURCE_DIR "/daemon/examples/goniod-mock.toml");
+  EXPECT_EQ(mock.motion["driver"], "mock");
+  EXPECT_EQ(mock.listen.size(), 2u);
+  const auto hw = Config::load(GONIO_SOURCE_DIR "/daemon/examples/goniod-hardware.toml");
+  EXPECT_EQ(hw.motion["driver"], "modbus");
+  EXPECT_EQ(hw.photometer["driver"], "scpi-serial");
+  // The Modbus table must be one the driver accepts (it opens no port to parse it).
+  auto table = hw.motion;
+  table.erase("driver");
+  const auto mc = drivers::modbus::MotionConfig::from_json(table);
+  EXPECT_EQ(mc.axes.size(), 2u);
+}
+
+TEST(Config, MockDefaultsUseTheDemoSample) {
+  const auto c = Config::mock_defaults();
+  EXPECT_EQ(c.motion["driver"], "mock");
+  EXPECT_EQ(c.motion["sample"], kDemoSampleBsdf);
+  EXPECT_EQ(c.photometer["driver"], "mock");
+}
+
+}  // namespace
+}  // namespace gonio::daemon

@@ -1,0 +1,193 @@
+// JSON-RPC 2.0 semantics of the dispatcher (independent of any transport).
+#include <unistd.h>
+
+#include <filesystem>
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include "gonio/daemon/methods.hpp"
+#include "gonio/daemon/rpc.hpp"
+
+namespace gonio::daemon::rpc {
+namespace {
+
+using nlohmann::json;
+
+class TestSession final : public Session {
+ public:
+  explicit TestSession(Role role) : Session("test", "peer", true) {
+    Principal p;
+    p.name = "tester";
+    p.role = role;
+    set_principal(p);
+  }
+  bool push(std::shared_ptr<const std::string>) override { return true; }
+};
+
+class DispatcherTest : public ::testing::Test {
+ protected:
+  DispatcherTest() : d_(nullptr) {
+    d_.add(Method{"echo", Role::viewer, false, [](Call& c) { return c.params; }});
+    d_.add(Method{"open", Role::none, false, [](Call&) { return json("ok"); }});
+    d_.add(Method{"admin.only", Role::admin, false, [](Call&) { return json(true); }});
+    d_.add(Method{"fail", Role::viewer, false, [](Call& c) -> json {
+                    const auto what = c.params.value("errc", std::string("out_of_range"));
+                    throw Error(errc_from_id(what), "failed on purpose", "the.field");
+                  }});
+    d_.add(Method{"boom", Role::viewer, false, [](Call&) -> json { throw std::runtime_error("bug"); }});
+  }
+
+  // Handles `text` as `role`; returns the parsed response ("" when none).
+  json call(const std::string& text, Role role = Role::viewer) {
+    std::string out = "<no reply>";
+    d_.handle(text, std::make_shared<TestSession>(role), [&](std::string r) { out = std::move(r); });
+    EXPECT_NE(out, "<no reply>") << "reply must be called exactly once";
+    return out.empty() ? json() : json::parse(out);
+  }
+
+  Dispatcher d_;
+};
+
+TEST_F(DispatcherTest, AnswersARequestWithItsId) {
+  const auto r = call(R"({"jsonrpc":"2.0","id":"a1","method":"echo","params":{"x":1}})");
+  EXPECT_EQ(r["jsonrpc"], "2.0");
+  EXPECT_EQ(r["id"], "a1");
+  EXPECT_EQ(r["result"]["x"], 1);
+  EXPECT_FALSE(r.contains("error"));
+  EXPECT_EQ(call(R"({"jsonrpc":"2.0","id":7,"method":"echo"})")["result"], json::object());
+}
+
+TEST_F(DispatcherTest, StandardErrorCodes) {
+  EXPECT_EQ(call("{not json")["error"]["code"], -32700);
+  EXPECT_TRUE(call("{not json")["id"].is_null());
+  EXPECT_EQ(call("42")["error"]["code"], -32600);
+  EXPECT_EQ(call(R"({"jsonrpc":"1.0","id":1,"method":"echo"})")["error"]["code"], -32600);
+  EXPECT_EQ(call(R"({"jsonrpc":"2.0","id":1,"method":5})")["error"]["code"], -32600);
+  EXPECT_EQ(call(R"({"jsonrpc":"2.0","id":{},"method":"echo"})")["error"]["code"], -32600);
+  EXPECT_EQ(call(R"({"jsonrpc":"2.0","id":1,"method":"echo","params":3})")["error"]["code"], -32600);
+  EXPECT_EQ(call(R"({"jsonrpc":"2.0","id":1,"method":"echo","extra":1})")["error"]["code"], -32600);
+  const auto nf = call(R"({"jsonrpc":"2.0","id":1,"method":"nope"})");
+  EXPECT_EQ(nf["error"]["code"], -32601);
+  EXPECT_EQ(nf["id"], 1);
+  EXPECT_EQ(call(R"({"jsonrpc":"2.0","id":1,"method":"echo","params":[1,2]})")["error"]["code"], -32602);
+  const auto ip = call(R"({"jsonrpc":"2.0","id":1,"method":"fail"})");
+  EXPECT_EQ(ip["error"]["code"], -32602);
+  EXPECT_EQ(ip["error"]["data"]["field"], "the.field");
+  EXPECT_EQ(ip["error"]["data"]["errc"], "out_of_range");
+  EXPECT_EQ(call(R"({"jsonrpc":"2.0","id":1,"method":"boom"})")["error"]["code"], -32603);
+  std::string deep(100, '[');
+  deep += std::string(100, ']');
+  EXPECT_EQ(call(deep)["error"]["code"], -32600);
+}
+
+TEST_F(DispatcherTest, ServerErrorsMapFromErrc) {
+  const auto code = [&](const char* errc) {
+    return call(json{{"jsonrpc", "2.0"}, {"id", 1}, {"method", "fail"}, {"params", {{"errc", errc}}}}.dump())["error"]["code"]
+        .get<int>();
+  };
+  EXPECT_EQ(code("not_found"), code::not_found);
+  EXPECT_EQ(code("invalid_state"), code::invalid_state);
+  EXPECT_EQ(code("busy"), code::instrument_busy);
+  EXPECT_EQ(code("timeout"), code::instrument_fault);
+  EXPECT_EQ(code("disconnected"), code::instrument_fault);
+  EXPECT_EQ(code("plan_rejected"), code::plan_rejected);
+  EXPECT_EQ(code("limit_violation"), code::limit_violation);
+  EXPECT_EQ(code("unsupported"), code::unsupported);
+  EXPECT_EQ(code("unauthorized"), code::unauthorized);
+  for (int c : {code::unauthorized, code::forbidden, code::not_found, code::invalid_state,
+                code::instrument_busy, code::instrument_fault, code::plan_rejected,
+                code::limit_violation, code::unsupported, code::io_error, code::overloaded})
+    EXPECT_TRUE(c <= -32000 && c >= -32099) << c;
+}
+
+TEST_F(DispatcherTest, NotificationsAreNeverAnswered) {
+  EXPECT_TRUE(call(R"({"jsonrpc":"2.0","method":"echo"})").is_null());
+  EXPECT_TRUE(call(R"({"jsonrpc":"2.0","method":"nope"})").is_null());
+  EXPECT_TRUE(call(R"({"jsonrpc":"2.0","method":"fail"})").is_null());
+}
+
+TEST_F(DispatcherTest, BatchesAnswerInOrderWithoutNotifications) {
+  const auto r = call(R"([{"jsonrpc":"2.0","id":1,"method":"echo","params":{"n":1}},
+                          {"jsonrpc":"2.0","method":"echo"},
+                          {"jsonrpc":"2.0","id":2,"method":"nope"},
+                          17])");
+  ASSERT_TRUE(r.is_array());
+  ASSERT_EQ(r.size(), 3u);
+  EXPECT_EQ(r[0]["result"]["n"], 1);
+  EXPECT_EQ(r[1]["error"]["code"], -32601);
+  EXPECT_EQ(r[2]["error"]["code"], -32600);
+  EXPECT_EQ(call("[]")["error"]["code"], -32600);  // an empty batch is one error, not an array
+  EXPECT_TRUE(call(R"([{"jsonrpc":"2.0","method":"echo"},{"jsonrpc":"2.0","method":"echo"}])").is_null());
+}
+
+TEST_F(DispatcherTest, RolesGateMethods) {
+  EXPECT_EQ(call(R"({"jsonrpc":"2.0","id":1,"method":"echo"})", Role::none)["error"]["code"], code::unauthorized);
+  EXPECT_EQ(call(R"({"jsonrpc":"2.0","id":1,"method":"open"})", Role::none)["result"], "ok");
+  EXPECT_EQ(call(R"({"jsonrpc":"2.0","id":1,"method":"admin.only"})", Role::technician)["error"]["code"],
+            code::forbidden);
+  EXPECT_EQ(call(R"({"jsonrpc":"2.0","id":1,"method":"admin.only"})", Role::admin)["result"], true);
+}
+
+TEST(Dispatcher, BlockingMethodsRunOnTheExecutor) {
+  std::vector<std::function<void()>> queued;
+  Dispatcher d([&](std::function<void()> f) { queued.push_back(std::move(f)); });
+  d.add(Method{"slow", Role::viewer, true, [](Call&) { return json(1); }});
+  std::string out;
+  bool replied = false;
+  d.handle(R"([{"jsonrpc":"2.0","id":1,"method":"slow"},{"jsonrpc":"2.0","id":2,"method":"slow"}])",
+           std::make_shared<TestSession>(Role::viewer), [&](std::string r) {
+             replied = true;
+             out = std::move(r);
+           });
+  EXPECT_FALSE(replied);  // nothing ran yet
+  ASSERT_EQ(queued.size(), 2u);
+  queued[1]();
+  EXPECT_FALSE(replied);  // a batch answers when all of it is done
+  queued[0]();
+  ASSERT_TRUE(replied);
+  const auto r = json::parse(out);
+  EXPECT_EQ(r[0]["id"], 1);
+  EXPECT_EQ(r[1]["id"], 2);
+}
+
+TEST(OpenRpc, DocumentsExactlyTheRegisteredMethods) {
+  const auto& doc = openrpc_document();
+  EXPECT_EQ(doc["openrpc"], "1.2.6");
+  std::set<std::string> documented;
+  for (const auto& m : doc["methods"]) {
+    documented.insert(m["name"].get<std::string>());
+    EXPECT_TRUE(m.contains("result")) << m["name"];
+    EXPECT_TRUE(m.contains("params")) << m["name"];
+  }
+  // What goniod registers: the real services, not started (no thread, no device opened).
+  namespace fs = std::filesystem;
+  const auto dir = fs::temp_directory_path() / fmt::format("gonio-openrpc-test-{}", ::getpid());
+  fs::create_directories(dir);
+  {
+    Config config = Config::mock_defaults();
+    config.twin_threads = 1;
+    Store store(dir / "goniod.db");
+    Auth auth({}, store);
+    TwinService twin(config, twin::InstrumentProfile::preset("gcms4"));
+    Hub hub;
+    AlertService alerts(store, hub);
+    Instrument instrument(config, store, twin, alerts, hub);
+    Dispatcher d(nullptr);
+    Services services{config, dir, store, auth, hub, twin, alerts, instrument,
+                      &d, std::chrono::steady_clock::now(), utc::now(), nullptr};
+    register_methods(d, services);
+    const auto names = d.names();
+    EXPECT_EQ(documented, std::set<std::string>(names.begin(), names.end()));
+  }
+  fs::remove_all(dir);
+  std::set<int> codes;
+  for (const auto& e : doc["x-error-codes"]) codes.insert(e["code"].get<int>());
+  for (int c : {-32700, -32600, -32601, -32602, -32603, code::unauthorized, code::forbidden, code::not_found,
+                code::invalid_state, code::instrument_busy, code::instrument_fault, code::plan_rejected,
+                code::limit_violation, code::unsupported, code::io_error, code::overloaded})
+    EXPECT_TRUE(codes.contains(c)) << c;
+}
+
+}  // namespace
+}  // namespace gonio::daemon::rpc
