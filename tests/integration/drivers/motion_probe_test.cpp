@@ -140,7 +140,7 @@ TEST_F(MotionProbe, UsageErrorsSendNothing) {
 TEST_F(MotionProbe, ExitCodesForDeviceTrouble) {
   // Absent: nothing listens on the port any more.
   auto absent = tcp("status");
-  absent.timeout = 500ms;
+  absent.timeout = 300ms;
   sim_->set_offline(true);
   auto r = run(absent);
   EXPECT_EQ(r.code, 3) << r.err;
@@ -158,7 +158,7 @@ TEST_F(MotionProbe, ExitCodesForDeviceTrouble) {
   // Silent unit: timeout.
   auto silent = tcp("status");
   silent.unit = 7;
-  silent.timeout = 1500ms;
+  silent.timeout = 1s;
   EXPECT_EQ(run(silent).code, 4);
 
   // Nonsense replies.
