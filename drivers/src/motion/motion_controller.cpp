@@ -1,4 +1,4 @@
-// Helpers of the MotionController interface shared by every motion driver: axis names
+// Small functions of the MotionController interface shared by every motion driver: axis names
 // and the human form of an axis status.
 #include "gonio/drivers/motion_controller.hpp"
 

@@ -1,11 +1,11 @@
-// Golden replay of a captured Modbus RTU session (golden/modbus_rtu_session.txt).
+// Golden replay of a captured Modbus RTU exchange (golden/modbus_rtu_capture.txt).
 //
 // The capture holds every request the driver sent and every reply of the device, as hex
 // lines. Two checks:
 //   - replay: a pty answers with the recorded replies, and the driver must send exactly
 //     the recorded requests, byte for byte (frame layout, CRC, register addresses, the
 //     16-register direct-data block, the order of polls), and read the right values;
-//   - capture: the same session against the simulator (instant motion, so the traffic
+//   - capture: the same calls against the simulator (instant motion, so the traffic
 //     does not depend on timing) reproduces the golden file.
 // GONIO_UPDATE_GOLDEN=1 rewrites the golden file from the simulator.
 #include <fcntl.h>
@@ -33,7 +33,7 @@ namespace devsim = gonio::drivers::devsim;
 namespace {
 
 const std::filesystem::path kGolden =
-    std::filesystem::path(GONIO_SOURCE_DIR) / "tests/integration/drivers/golden/modbus_rtu_session.txt";
+    std::filesystem::path(GONIO_SOURCE_DIR) / "tests/integration/drivers/golden/modbus_rtu_capture.txt";
 
 struct Exchange {
   std::vector<std::uint8_t> request;
@@ -89,8 +89,8 @@ json golden_config(const std::string& device) {
               {"axes", {{"incidence", ax(1)}, {"receive", ax(2)}}}};
 }
 
-// The session: status, two guarded moves, a readback, homing, status.
-void session(const std::string& device) {
+// The calls: status, two guarded moves, a readback, homing, status.
+void drive(const std::string& device) {
   auto m = gonio::drivers::make_modbus_motion(golden_config(device));
   const auto s0 = m->status(Axis::incidence, 2s);
   EXPECT_TRUE(s0.ready);
@@ -174,7 +174,7 @@ std::vector<Exchange> capture_from_simulator(const std::filesystem::path& out) {
   cfg["record"] = out.string();
   devsim::ModbusSim sim(devsim::ModbusSimConfig::from_json(cfg));
   sim.start();
-  session(sim.rtu_path());
+  drive(sim.rtu_path());
   sim.stop();
   return load(out);
 }
@@ -191,7 +191,7 @@ TEST(MotionGolden, CaptureIsWellFormed) {
     ASSERT_FALSE(ex.reply.empty());
     EXPECT_TRUE(gonio::drivers::modbus::crc_ok(ex.reply)) << to_hex(ex.reply);
     EXPECT_EQ(ex.reply[0], ex.request[0]);  // the addressed unit answers
-    EXPECT_EQ(ex.reply[1], ex.request[1]);  // no exception replies in this session
+    EXPECT_EQ(ex.reply[1], ex.request[1]);  // no exception replies in this capture
     // The direct data operation: 16 registers from 0x0058, trigger = 1 last.
     if (ex.request[1] == 0x10 && ex.request[2] == 0x00 && ex.request[3] == 0x58) {
       block_write = true;
@@ -209,7 +209,7 @@ TEST(MotionGolden, DriverSendsExactlyTheRecordedRequests) {
   const auto golden = load(kGolden);
   ASSERT_FALSE(golden.empty()) << "missing " << kGolden;
   Replayer replay(golden);
-  session(replay.path());
+  drive(replay.path());
   replay.join();
   EXPECT_EQ(replay.mismatch(), "");
   EXPECT_EQ(replay.served(), golden.size());
