@@ -187,10 +187,4 @@ class LineReader {
   std::size_t line_ = 0;
 };
 
-// The file name that errors should show for a path (no directories).
-inline std::string display_name(const std::string& path) {
-  const auto pos = path.find_last_of('/');
-  return pos == std::string::npos ? path : path.substr(pos + 1);
-}
-
 }  // namespace gonio::twin::tab

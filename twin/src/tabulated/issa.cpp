@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <numeric>
 #include <sstream>
 
@@ -35,9 +36,8 @@ class Tokens {
   bool next(std::string& tok) {
     while (pos_ >= toks_.size()) {
       if (!r_.next_content(line_)) return false;
-      owned_.clear();
-      for (auto t : tab::tokens(line_)) owned_.emplace_back(t);
-      toks_.assign(owned_.begin(), owned_.end());
+      toks_.clear();
+      for (auto t : tab::tokens(line_)) toks_.emplace_back(t);
       pos_ = 0;
     }
     tok = toks_[pos_++];
@@ -54,7 +54,7 @@ class Tokens {
  private:
   tab::LineReader& r_;
   std::string line_;
-  std::vector<std::string> owned_, toks_;
+  std::vector<std::string> toks_;
   std::size_t pos_ = 0;
 };
 
@@ -273,9 +273,7 @@ TabulatedParts read_issa(std::istream& in, std::string_view source) {
   Header h;
   std::string label = read_header(r, tk, h);
   require_header(r, h);
-  const std::size_t n_rot = h.rotation ? h.rotation->size() : 1;
   // A size check before any data: the table must fit (values still grow only with input).
-  (void)n_rot;
   if (h.incidence->size() * h.azimuth->size() > BsdfTable::kMaxValues / h.radial->size())
     r.fail("the declared grid exceeds the size limit", "ScatterRadial");
 
@@ -377,7 +375,7 @@ void write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
     return s;
   };
 
-  std::ostringstream os;
+  std::ostream& os = out;
   if (!o.comment.empty()) {
     std::istringstream cs(o.comment);
     for (std::string line; std::getline(cs, line);) os << "# " << line << '\n';
@@ -400,6 +398,7 @@ void write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
       const auto frame = tab::MirrorFrame::of(wi);
       os << "TIS " << fmt::format("{:.6g}", hemispherical_integral(t, incidence[i])) << '\n';
       double f = 0;
+      fmt::memory_buffer buf;
       for (std::size_t a = 0; a < azimuth.size(); ++a) {
         for (std::size_t j = 0; j < radial.size(); ++j) {
           if (native) {
@@ -411,14 +410,15 @@ void write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
             const double r = std::min(radial[j] * kDegToRad, horizon_radial(frame, az) - 1e-6);
             t.eval(wi, frame.direction(std::cos(r), az), {&f, 1});
           }
-          os << (j ? "\t" : "") << fmt::format("{}", f);
+          if (j) buf.push_back('\t');
+          fmt::format_to(std::back_inserter(buf), "{}", f);
         }
-        os << '\n';
+        buf.push_back('\n');
       }
+      os.write(buf.data(), static_cast<std::streamsize>(buf.size()));
     }
     os << "DataEnd\n";
   }
-  out << os.str();
   if (!out) throw Error(Errc::io_error, "could not write the IS-SA data");
 }
 

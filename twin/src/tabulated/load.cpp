@@ -1,6 +1,7 @@
 // Tabulated BSDF files chosen by extension: the `@file` spec of make_bsdf and the `convert`
 // command both come through here.
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 
 #include <fmt/format.h>

@@ -42,88 +42,87 @@ const std::vector<double>& TableSampler::radial_edges_deg() {
   return edges;
 }
 
-TableSampler::TableSampler(const Density& f, bool reflection, bool transmission, bool anisotropic)
-    : reflection_(reflection), transmission_(transmission), anisotropic_(anisotropic) {
+TableSampler::TableSampler(Density f, bool reflection, bool transmission, bool anisotropic)
+    : f_(std::move(f)), reflection_(reflection), transmission_(transmission),
+      anisotropic_(anisotropic) {
   const auto& edges = radial_edges_deg();
   const std::size_t rows = edges.size() - 1;
-  constexpr std::size_t cols = kAzimuthCells;
   theta_nodes_ = static_cast<std::size_t>(std::lround(90.0 / kThetaStepDeg)) + 1;
   phi_nodes_ = anisotropic_ ? static_cast<std::size_t>(std::lround(360.0 / kPhiStepDeg)) : 1;
   for (const double e : edges) cos_edges_.push_back(std::cos(e * kDegToRad));
   cos_edges_.front() = 1;
   cos_edges_.back() = -1;
-  for (std::size_t j = 0; j < rows; ++j)
+  for (std::size_t j = 0; j < rows; ++j) {
     cell_solid_angle_.push_back((cos_edges_[j] - cos_edges_[j + 1]) * kCellAz);
-
-  // Evaluation points of one node: corners (rows + 1) × cols (periodic in a) and centres.
-  std::vector<double> corner_r(rows + 1), centre_r(rows);
-  for (std::size_t j = 0; j <= rows; ++j) corner_r[j] = cos_edges_[j];
-  for (std::size_t j = 0; j < rows; ++j)
-    centre_r[j] = std::cos(0.5 * (edges[j] + edges[j + 1]) * kDegToRad);
-
-  grids_.resize(theta_nodes_ * phi_nodes_ * 2);
-  std::vector<double> corner_val[2], centre_val[2];
-  for (int s = 0; s < 2; ++s) {
-    corner_val[s].assign((rows + 1) * cols, 0.0);
-    centre_val[s].assign(rows * cols, 0.0);
+    centre_cos_.push_back(std::cos(0.5 * (edges[j] + edges[j + 1]) * kDegToRad));
   }
+  grids_.resize(theta_nodes_ * phi_nodes_);
+  built_ = std::make_unique<std::once_flag[]>(theta_nodes_ * phi_nodes_);
+}
+
+void TableSampler::build_node(std::size_t k, std::size_t l) const {
+  const std::size_t rows = cos_edges_.size() - 1;
+  constexpr std::size_t cols = kAzimuthCells;
   // f̄·cos at a frame direction d (d.z > 0): wi = d for reflection, its mirror image for
   // transmission; both share the cosine d.z.
-  const auto point = [&](const Vec3& d, const Vec3& wo, double& refl, double& trans) {
+  const double theta = std::min(static_cast<double>(k) * kThetaStepDeg, 89.5) * kDegToRad;
+  const double phi = static_cast<double>(l) * kPhiStepDeg * kDegToRad;
+  const Vec3 wo = spherical(theta, phi);
+  const auto frame = tab::MirrorFrame::of(wo);
+  const auto point = [&](const Vec3& d, double& refl, double& trans) {
     refl = trans = 0;
     if (!(d.z > 0)) return;
-    if (reflection_) refl = std::max(0.0, f(d, wo)) * d.z;
-    if (transmission_) trans = std::max(0.0, f(tab::flip_z(d), wo)) * d.z;
+    if (reflection_) refl = std::max(0.0, f_(d, wo)) * d.z;
+    if (transmission_) trans = std::max(0.0, f_(tab::flip_z(d), wo)) * d.z;
   };
+  // Evaluation points: corners (rows + 1) × cols (periodic in a) and cell centres.
+  std::vector<double> corner[2], centre[2];
+  for (int s = 0; s < 2; ++s) {
+    corner[s].assign((rows + 1) * cols, 0.0);
+    centre[s].assign(rows * cols, 0.0);
+  }
+  for (std::size_t j = 0; j <= rows; ++j)
+    for (std::size_t m = 0; m < cols; ++m)
+      point(frame.direction(cos_edges_[j], static_cast<double>(m) * kCellAz),
+            corner[0][j * cols + m], corner[1][j * cols + m]);
+  for (std::size_t j = 0; j < rows; ++j)
+    for (std::size_t m = 0; m < cols; ++m)
+      point(frame.direction(centre_cos_[j], (static_cast<double>(m) + 0.5) * kCellAz),
+            centre[0][j * cols + m], centre[1][j * cols + m]);
 
-  for (std::size_t l = 0; l < phi_nodes_; ++l) {
-    for (std::size_t k = 0; k < theta_nodes_; ++k) {
-      const double theta = std::min(static_cast<double>(k) * kThetaStepDeg, 89.5) * kDegToRad;
-      const double phi = static_cast<double>(l) * kPhiStepDeg * kDegToRad;
-      const Vec3 wo = spherical(theta, phi);
-      const auto frame = tab::MirrorFrame::of(wo);
-      for (std::size_t j = 0; j <= rows; ++j)
-        for (std::size_t m = 0; m < cols; ++m)
-          point(frame.direction(corner_r[j], static_cast<double>(m) * kCellAz), wo,
-                corner_val[0][j * cols + m], corner_val[1][j * cols + m]);
-      for (std::size_t j = 0; j < rows; ++j)
-        for (std::size_t m = 0; m < cols; ++m)
-          point(frame.direction(centre_r[j], (static_cast<double>(m) + 0.5) * kCellAz), wo,
-                centre_val[0][j * cols + m], centre_val[1][j * cols + m]);
-
-      for (int s = 0; s < 2; ++s) {
-        Grid& g = grids_[(l * theta_nodes_ + k) * 2 + static_cast<std::size_t>(s)];
-        g.value.assign(rows * cols, 0.0);
-        g.row_cdf.assign(rows + 1, 0.0);
-        g.col_cdf.assign(rows * (cols + 1), 0.0);
-        const auto& cv = corner_val[s];
-        for (std::size_t j = 0; j < rows; ++j) {
-          double row = 0;
-          for (std::size_t m = 0; m < cols; ++m) {
-            const std::size_t m1 = (m + 1) % cols;
-            const double v = std::max({cv[j * cols + m], cv[j * cols + m1], cv[(j + 1) * cols + m],
-                                       cv[(j + 1) * cols + m1], centre_val[s][j * cols + m]});
-            g.value[j * cols + m] = v;
-            row += v;
-            g.col_cdf[j * (cols + 1) + m + 1] = row;
-          }
-          double* cc = &g.col_cdf[j * (cols + 1)];
-          for (std::size_t m = 1; m <= cols; ++m)
-            cc[m] = row > 0 ? cc[m] / row : static_cast<double>(m) / static_cast<double>(cols);
-          cc[cols] = 1;
-          g.row_cdf[j + 1] = g.row_cdf[j] + row * cell_solid_angle_[j];
-        }
-        g.integral = g.row_cdf[rows];
-        for (auto& c : g.row_cdf) c = g.integral > 0 ? c / g.integral : 0;
-        if (g.integral > 0) g.row_cdf[rows] = 1;
+  for (int s = 0; s < 2; ++s) {
+    Grid& g = grids_[l * theta_nodes_ + k][static_cast<std::size_t>(s)];
+    g.value.assign(rows * cols, 0.0);
+    g.row_cdf.assign(rows + 1, 0.0);
+    g.col_cdf.assign(rows * (cols + 1), 0.0);
+    const auto& cv = corner[s];
+    for (std::size_t j = 0; j < rows; ++j) {
+      double row = 0;
+      for (std::size_t m = 0; m < cols; ++m) {
+        const std::size_t m1 = (m + 1) % cols;
+        const double v = std::max({cv[j * cols + m], cv[j * cols + m1], cv[(j + 1) * cols + m],
+                                   cv[(j + 1) * cols + m1], centre[s][j * cols + m]});
+        g.value[j * cols + m] = v;
+        row += v;
+        g.col_cdf[j * (cols + 1) + m + 1] = row;
       }
+      double* cc = &g.col_cdf[j * (cols + 1)];
+      for (std::size_t m = 1; m <= cols; ++m)
+        cc[m] = row > 0 ? cc[m] / row : static_cast<double>(m) / static_cast<double>(cols);
+      cc[cols] = 1;
+      g.row_cdf[j + 1] = g.row_cdf[j] + row * cell_solid_angle_[j];
     }
+    g.integral = g.row_cdf[rows];
+    for (auto& c : g.row_cdf) c = g.integral > 0 ? c / g.integral : 0;
+    if (g.integral > 0) g.row_cdf[rows] = 1;
   }
 }
 
 const TableSampler::Grid& TableSampler::grid(std::size_t theta_node, std::size_t phi_node,
                                              bool transmission) const {
-  return grids_[(phi_node * theta_nodes_ + theta_node) * 2 + (transmission ? 1 : 0)];
+  const std::size_t node = phi_node * theta_nodes_ + theta_node;
+  std::call_once(built_[node], [&] { build_node(theta_node, phi_node); });
+  return grids_[node][transmission ? 1 : 0];
 }
 
 std::size_t TableSampler::components(const Vec3& wo, Component out[8]) const {

@@ -14,7 +14,10 @@
 // samples exactly.
 #pragma once
 
+#include <array>
 #include <functional>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <vector>
 
@@ -32,8 +35,9 @@ class TableSampler {
   static constexpr int kAzimuthCells = 36;
 
   // `f` is f̄(wi, wo) >= 0; reflection / transmission say which hemispheres of wi (relative to
-  // wo) the table covers; anisotropic adds receiver-azimuth nodes.
-  TableSampler(const Density& f, bool reflection, bool transmission, bool anisotropic);
+  // wo) the table covers; anisotropic adds receiver-azimuth nodes. A node's grids are built
+  // on first use (thread-safe), so only the receiver directions actually queried cost time.
+  TableSampler(Density f, bool reflection, bool transmission, bool anisotropic);
 
   std::optional<BsdfSample> sample(const Vec3& wo, double u_lobe, Vec2 u) const;
   double pdf(const Vec3& wo, const Vec3& wi) const;
@@ -56,15 +60,20 @@ class TableSampler {
   };
 
   const Grid& grid(std::size_t theta_node, std::size_t phi_node, bool transmission) const;
+  void build_node(std::size_t theta_node, std::size_t phi_node) const;
   std::size_t components(const Vec3& wo, Component out[8]) const;
   double grid_density(const Grid& g, double r_deg, double a_rad) const;
   double defensive_pdf(const Vec3& wi) const;
 
+  Density f_;
   bool reflection_, transmission_, anisotropic_;
   std::size_t theta_nodes_, phi_nodes_;
-  std::vector<double> cos_edges_;  // cos of radial edges (decreasing)
+  std::vector<double> cos_edges_;         // cos of radial edges (decreasing)
   std::vector<double> cell_solid_angle_;  // per radial row
-  std::vector<Grid> grids_;        // [(phi·theta_nodes + theta)·2 + side]
+  std::vector<double> centre_cos_;        // cos of the radial cell centres
+  // Per node (phi·theta_nodes + theta): reflection and transmission grids, built once.
+  mutable std::vector<std::array<Grid, 2>> grids_;
+  std::unique_ptr<std::once_flag[]> built_;
 };
 
 }  // namespace gonio::twin::detail

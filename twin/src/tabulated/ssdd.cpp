@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <sstream>
 
@@ -331,27 +332,41 @@ void write_values(std::ostream& os, const std::vector<double>& values, std::size
                   bool binary, const std::vector<double>* p2, const std::vector<double>* p3,
                   std::size_t n0n1) {
   if (binary) {
-    std::string bytes;
-    bytes.reserve(values.size() * 4);
+    char bytes[4096];
+    std::size_t n = 0;
     for (const double x : values) {
       const auto bits = std::bit_cast<std::uint32_t>(static_cast<float>(x));
-      for (int k = 0; k < 4; ++k) bytes.push_back(static_cast<char>((bits >> (8 * k)) & 0xff));
+      for (int k = 0; k < 4; ++k) bytes[n++] = static_cast<char>((bits >> (8 * k)) & 0xff);
+      if (n == sizeof bytes) {
+        os.write(bytes, static_cast<std::streamsize>(n));
+        n = 0;
+      }
     }
-    os.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    os << '\n';
+    bytes[n++] = '\n';
+    os.write(bytes, static_cast<std::streamsize>(n));
     return;
   }
+  // Formatted in a buffer flushed every ~64 kB: no copy of the whole file in memory.
+  fmt::memory_buffer buf;
+  const auto out = std::back_inserter(buf);
   const std::size_t rows = values.size() / ch;
   for (std::size_t k = 0; k < rows; ++k) {
+    if (buf.size() > (1 << 16)) {
+      os.write(buf.data(), static_cast<std::streamsize>(buf.size()));
+      buf.clear();
+    }
     if (p2 && p3 && k % n0n1 == 0) {
       const std::size_t i23 = k / n0n1, i2 = i23 % p2->size(), i3 = i23 / p2->size();
-      if (i2 == 0) os << "# PARAM3: " << text::format_number((*p3)[i3]) << '\n';
-      os << "# PARAM2: " << text::format_number((*p2)[i2]) << '\n';
+      if (i2 == 0) fmt::format_to(out, "# PARAM3: {}\n", text::format_number((*p3)[i3]));
+      fmt::format_to(out, "# PARAM2: {}\n", text::format_number((*p2)[i2]));
     }
-    for (std::size_t c = 0; c < ch; ++c)
-      os << (c ? " " : "") << fmt::format("{}", values[k * ch + c]);
-    os << '\n';
+    for (std::size_t c = 0; c < ch; ++c) {
+      if (c) buf.push_back(' ');
+      fmt::format_to(out, "{}", values[k * ch + c]);
+    }
+    buf.push_back('\n');
   }
+  os.write(buf.data(), static_cast<std::streamsize>(buf.size()));
 }
 
 void write_colour(std::ostream& os, const std::vector<double>& nm) {
@@ -386,6 +401,7 @@ TabulatedParts read_ssdd(std::istream& in, std::string_view source) {
   TabulatedParts parts;
   std::optional<Meta> meta;
   bool seen_type[4] = {false, false, false, false};
+  bool any_block = false;
   while (r.next_content(line)) {
     const auto t = tab::tokens(line);
     const std::string_view key = t[0];
@@ -400,11 +416,12 @@ TabulatedParts read_ssdd(std::istream& in, std::string_view source) {
                            "specular_transmittance", t[1]), key);
       if (seen_type[type]) r.fail(fmt::format("a second {} block", t[1]), key);
       seen_type[type] = true;
+      any_block = true;
       meta.emplace();
       meta->type = static_cast<DataType>(type);
       meta->line = r.line();
     } else if (!meta) {
-      if (key == "SOFTWARE" || key == "API" || key == "DATE") continue;
+      if (!any_block && (key == "SOFTWARE" || key == "API" || key == "DATE")) continue;
       if (key == "VERSION") r.fail("VERSION given twice", key);
       r.fail(fmt::format("'{}' outside a data block (expected SOFTWARE, API, DATE or DATA_TYPE)",
                          key), key);
@@ -432,7 +449,7 @@ TabulatedParts read_ssdd(const std::string& path) {
 void write_ssdd(std::ostream& out, const TabulatedParts& parts, const SsddWriteOptions& o) {
   if (parts.empty()) throw Error::invalid("parts", "hold no table");
   const bool binary = o.data == SsddData::binary;
-  std::ostringstream os;
+  std::ostream& os = out;
   if (!o.comment.empty()) {
     std::istringstream cs(o.comment);
     for (std::string l; std::getline(cs, l);) os << "# " << l << '\n';
@@ -477,7 +494,6 @@ void write_ssdd(std::ostream& out, const TabulatedParts& parts, const SsddWriteO
   if (parts.btdf) bsdf(*parts.btdf, "btdf");
   if (parts.specular_reflectance) specular(*parts.specular_reflectance, "specular_reflectance");
   if (parts.specular_transmittance) specular(*parts.specular_transmittance, "specular_transmittance");
-  out << os.str();
   if (!out) throw Error(Errc::io_error, "could not write the SSDD data");
 }
 

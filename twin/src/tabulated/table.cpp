@@ -196,24 +196,28 @@ std::string_view to_string(TableParam p) noexcept {
 
 // ---- BsdfTable ----------------------------------------------------------------------------------
 
+std::size_t BsdfTable::check_axes(TableParam param, const Axes& axes, TableReduction reduction,
+                                  std::size_t channels) {
+  if (reduction.reciprocal && param != TableParam::half_difference)
+    throw Error::invalid("table.reduction",
+                         "reciprocity reduction needs the half_difference parametrization");
+  const double radial_max = param == TableParam::specular ? 180.0 : 90.0;
+  const double period = p3_period(param, reduction);
+  check_axis(axes.p0, "table.p0", 0, 90, false);
+  check_axis(axes.p1, "table.p1", 0, 360, true);
+  check_axis(axes.p2, "table.p2", 0, radial_max, false);
+  check_axis(axes.p3, "table.p3", 0, reduction.bilateral ? period / 2 : period, false);
+  return checked_size({axes.p0.size(), std::max<std::size_t>(1, axes.p1.size()), axes.p2.size(),
+                       axes.p3.size(), channels},
+                      "table");
+}
+
 BsdfTable::BsdfTable(TableParam param, Axes axes, std::vector<double> wavelengths_nm,
                      std::vector<double> values, TableReduction reduction)
     : param_(param), axes_(std::move(axes)), nm_(std::move(wavelengths_nm)),
       values_(std::move(values)), reduction_(reduction) {
-  if (reduction_.reciprocal && param_ != TableParam::half_difference)
-    throw Error::invalid("table.reduction",
-                         "reciprocity reduction needs the half_difference parametrization");
-  const double radial_max = param_ == TableParam::specular ? 180.0 : 90.0;
-  const double period = p3_period(param_, reduction_);
-  check_axis(axes_.p0, "table.p0", 0, 90, false);
-  check_axis(axes_.p1, "table.p1", 0, 360, true);
-  check_axis(axes_.p2, "table.p2", 0, radial_max, false);
-  check_axis(axes_.p3, "table.p3", 0, reduction_.bilateral ? period / 2 : period, false);
   check_wavelengths(nm_, "table.wavelengths");
-  const std::size_t total = checked_size(
-      {axes_.p0.size(), std::max<std::size_t>(1, axes_.p1.size()), axes_.p2.size(), axes_.p3.size(),
-       channels()},
-      "table");
+  const std::size_t total = check_axes(param_, axes_, reduction_, channels());
   if (values_.size() != total)
     throw Error::invalid("table.values", fmt::format("has {} entries, the axes need {}",
                                                      values_.size(), total));
@@ -310,18 +314,24 @@ void BsdfTable::eval(const Vec3& wi, const Vec3& wo, std::span<double> out) cons
   interpolate(coords(wi, wo), out);
 }
 
+// Both build the new table field by field: copying *this first would copy the values too.
 BsdfTable BsdfTable::resampled(const std::vector<double>& nm) const {
   check_wavelengths(nm, "wavelengths");
-  BsdfTable t = *this;
-  t.values_ = resample_channels(values_, nm_, nm);
+  BsdfTable t;
+  t.param_ = param_;
+  t.axes_ = axes_;
+  t.reduction_ = reduction_;
+  t.values_ = nm == nm_ ? values_ : resample_channels(values_, nm_, nm);
   t.nm_ = nm;
   return t;
 }
 
 BsdfTable BsdfTable::weighted(std::span<const double> weights) const {
-  BsdfTable t = *this;
+  BsdfTable t;
+  t.param_ = param_;
+  t.axes_ = axes_;
+  t.reduction_ = reduction_;
   t.values_ = weigh_channels(values_, channels(), weights, "weights");
-  t.nm_.clear();
   check_values(t.values_, "table.values", kMaxF);
   return t;
 }
@@ -363,7 +373,7 @@ void SpecularTable::interpolate(double theta_deg, double phi_deg,
 SpecularTable SpecularTable::resampled(const std::vector<double>& nm) const {
   check_wavelengths(nm, "wavelengths");
   SpecularTable t = *this;
-  t.values_ = resample_channels(values_, nm_, nm);
+  if (nm != nm_) t.values_ = resample_channels(values_, nm_, nm);
   t.nm_ = nm;
   return t;
 }

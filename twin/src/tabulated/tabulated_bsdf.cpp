@@ -144,19 +144,24 @@ void TabulatedBsdf::delta_lobes(const Vec3& wo_in, std::vector<DeltaLobe>& out) 
 
 BsdfTable tabulate(const Bsdf& bsdf, const AngularGrid& g, bool transmission) {
   const BsdfTable::Axes axes{g.theta_i, g.phi_i, g.theta_o, g.phi_o};
-  // Validate the grid (and the size) before evaluating anything.
-  {
-    const std::size_t n1 = std::max<std::size_t>(1, g.phi_i.size());
-    const std::size_t n = g.theta_i.size() * n1 * g.theta_o.size() * g.phi_o.size();
-    if (g.theta_i.empty() || g.theta_o.empty() || g.phi_o.empty())
-      throw Error::invalid("grid", "needs theta_i, theta_o and phi_o nodes");
-    if (n > BsdfTable::kMaxValues / std::max<std::size_t>(1, bsdf.channels()))
-      throw Error(Errc::out_of_range, fmt::format("grid has {} nodes, too many to tabulate", n),
-                  "grid");
-    (void)BsdfTable(TableParam::spherical, axes, {}, std::vector<double>(n, 0.0),
-                    {g.bilateral, false});
-  }
+  // Validate the grid (and the size) before evaluating anything, naming the grid's fields.
   const std::size_t ch = bsdf.channels();
+  try {
+    BsdfTable::check_axes(TableParam::spherical, axes, {g.bilateral, false}, ch);
+  } catch (const Error& e) {
+    static constexpr std::pair<std::string_view, std::string_view> kNames[] = {
+        {"table.p0", "grid.theta_i"}, {"table.p1", "grid.phi_i"},
+        {"table.p2", "grid.theta_o"}, {"table.p3", "grid.phi_o"}, {"table", "grid"}};
+    std::string field = e.field(), msg = e.what();
+    for (const auto& [from, to] : kNames)
+      if (field.rfind(from, 0) == 0) {
+        field = std::string(to) + field.substr(from.size());
+        if (const auto pos = msg.find(from); pos != std::string::npos)
+          msg.replace(pos, from.size(), to);
+        break;
+      }
+    throw Error(e.code(), msg, field);
+  }
   const bool iso = g.phi_i.empty();
   const std::size_t n1 = iso ? 1 : g.phi_i.size();
   std::vector<double> values;

@@ -30,19 +30,23 @@ double stored(int ih, int id, int ip, int c) { return 1500.0 * (1 + ih + 0.01 * 
 // A MERL file of the given resolution, φd fastest, then θd, then θh, blocks R, G, B.
 std::string merl_file(int nh, int nd, int np) {
   std::string s;
-  s.reserve(12 + 24 * static_cast<std::size_t>(nh * nd * np));
   put_i32(s, nh);
   put_i32(s, nd);
   put_i32(s, np);
+  s.resize(12 + 24 * static_cast<std::size_t>(nh * nd * np));
+  std::size_t at = 12;
   for (int c = 0; c < 3; ++c)
     for (int ih = 0; ih < nh; ++ih)
       for (int id = 0; id < nd; ++id)
-        for (int ip = 0; ip < np; ++ip) put_f64(s, stored(ih, id, ip, c));
+        for (int ip = 0; ip < np; ++ip) {
+          const auto u = std::bit_cast<std::uint64_t>(stored(ih, id, ip, c));
+          for (int k = 0; k < 8; ++k) s[at++] = static_cast<char>((u >> (8 * k)) & 0xff);
+        }
   return s;
 }
 
-TabulatedParts read_bytes(const std::string& bytes) {
-  std::istringstream in(bytes);
+TabulatedParts read_bytes(std::string bytes) {
+  std::istringstream in(std::move(bytes));
   return read_merl(in, "t.binary");
 }
 

@@ -325,6 +325,17 @@ TEST(TabulatedBsdf, DeltaLobesFromSpecularTables) {
   EXPECT_FALSE(tab.sample_wi(wo, 0.5, {0.5, 0.5}));
 }
 
+TEST(TabulatedBsdf, TabulateNamesTheGridField) {
+  const tabtest::Lambert model(WavelengthGrid::parse("550"), 0.5);
+  auto e = error_of([&] { tabulate(model, AngularGrid{{0, 30}, {}, {0, 40, 20}, {0, 180}, false}); });
+  EXPECT_EQ(e.field(), "grid.theta_o[2]");
+  EXPECT_NE(std::string(e.what()).find("grid.theta_o[2]"), std::string::npos) << e.what();
+  e = error_of([&] { tabulate(model, AngularGrid{{0, 30}, {}, {0, 40}, {0, 270}, true}); });
+  EXPECT_EQ(e.field(), "grid.phi_o[1]");
+  e = error_of([&] { tabulate(model, AngularGrid{{0, 30}, {}, {}, {0}, false}); });
+  EXPECT_EQ(e.field(), "grid.theta_o");
+}
+
 TEST(TabulatedBsdf, FromPlainArrays) {
   const auto grid = WavelengthGrid::parse("550");
   const AngularGrid ag{{0, 45}, {}, {0, 45, 90}, {0, 180}, true};

@@ -80,6 +80,9 @@ class BsdfTable {
   // Validates everything (Error naming the offending field: "table.p2[3]", "table.values[17]").
   BsdfTable(TableParam param, Axes axes, std::vector<double> wavelengths_nm,
             std::vector<double> values, TableReduction reduction = {});
+  // The axis and size checks of the constructor alone; returns the number of nodes.
+  static std::size_t check_axes(TableParam param, const Axes& axes, TableReduction reduction,
+                                std::size_t channels = 1);
 
   TableParam param() const noexcept { return param_; }
   const Axes& axes() const noexcept { return axes_; }
