@@ -336,6 +336,10 @@ TabulatedParts read_issa(const std::string& path) {
 void write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
                 const IssaWriteOptions& o) {
   if (table.empty()) throw Error::invalid("table", "is empty");
+  if (!table.isotropic())
+    throw Error(Errc::unsupported,
+                "an IS-SA file holds one sample rotation; an anisotropic table needs .ssdd",
+                "table");
   // Spectral content: one grey table per output channel.
   std::vector<BsdfTable> channels;
   if (o.xyz_weights) {

@@ -216,6 +216,14 @@ TEST(Issa, ChannelsBecomeMonochromeOrXyz) {
     write_issa(os, table, false, bad);
   });
   EXPECT_EQ(e.field(), "weights");
+  // One sample rotation only: an anisotropic table is refused rather than sliced.
+  const tabtest::Lobes aniso(grid, 0.1, 0.3, 10, 0, 1, 1.0);
+  const auto at = tabulate(aniso, AngularGrid{{0, 45}, {0, 180}, {0, 45, 90}, {0, 180}, false});
+  const auto e2 = error_of([&] {
+    std::ostringstream os;
+    write_issa(os, at, false);
+  });
+  EXPECT_EQ(e2.code(), Errc::unsupported);
 }
 
 struct Bad {
