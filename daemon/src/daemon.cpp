@@ -94,6 +94,7 @@ Config load_config(const DaemonOptions& o) {
 }  // namespace
 
 int run_daemon(const DaemonOptions& o) {
+  ::umask(027);  // the store, its journal and endpoints.json: owner and group only
   Config config;
   try {
     config = load_config(o);

@@ -389,6 +389,7 @@ void register_methods(rpc::Dispatcher& d, Services& s) {
   add("queue.reorder", Role::technician, false, [&s](rpc::Call& c) {
     ObjectReader r(c.params, "");
     const auto id = read_id(r, "scan");
+    if (!r.has("position")) throw Error::invalid("position", "is required (0 = next)");
     const auto position = read_count(r, "position", 0, 1000000);
     r.finish();
     (void)require_scan(s.store, id);

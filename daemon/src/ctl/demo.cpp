@@ -4,6 +4,7 @@
 // predicted with the divergence summary, plot both curves to a PNG (twin plot API), and stop
 // goniod with SIGTERM (or leave it serving).
 #include <fcntl.h>
+#include <sys/prctl.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -39,11 +40,17 @@ fs::path self_dir() {
   return ec ? fs::current_path() : exe.parent_path();
 }
 
-pid_t spawn_goniod(const std::string& exe, const fs::path& dir, const fs::path& config) {
+pid_t spawn_goniod(const std::string& exe, const fs::path& dir, const fs::path& config, bool detach) {
   const auto log = (dir / "goniod.log").string();
+  const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
   if (pid < 0) throw Error(Errc::io_error, fmt::format("fork: {}", std::strerror(errno)));
   if (pid == 0) {
+    // Unless it is to keep serving, goniod goes down with the demo, however the demo ends.
+    if (!detach) {
+      ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+      if (::getppid() != parent) ::_exit(1);
+    }
     const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0640);
     if (fd >= 0) {
       ::dup2(fd, STDOUT_FILENO);
@@ -122,7 +129,8 @@ int run_demo(const DemoOptions& d, const Options& o) {
         << "[instrument.photometer]\ndriver = \"mock\"\n";
   }
   std::cout << fmt::format("demo: starting goniod --mock in {}\n", dir.string());
-  const pid_t pid = spawn_goniod(goniod, dir, config);
+  ::signal(SIGPIPE, SIG_IGN);  // a closed stdout must not leave goniod behind
+  const pid_t pid = spawn_goniod(goniod, dir, config, d.keep_serving);
   int code = ctl_exit::ok;
   try {
     wait_ready(pid, dir);
@@ -218,7 +226,6 @@ int run_demo(const DemoOptions& d, const Options& o) {
     meas.marker_size = 5;
     top.series.emplace_back("predicted (twin) ", x, yp);
     auto& bottom = fig.panels.emplace_back();
-    bottom.title = "divergence per point";
     bottom.x = twin::Axis("receiving angle θr", "°");
     bottom.y = twin::Axis("max |z|, ΔE00");
     auto& zs = bottom.series.emplace_back("max |z|", x, z);
@@ -226,7 +233,13 @@ int run_demo(const DemoOptions& d, const Options& o) {
     zs.marker_size = 4;
     auto& ds = bottom.series.emplace_back("ΔE00", x, de);
     ds.line = twin::LineStyle::dashed;
-    bottom.y_reference_lines = {z_threshold};
+    double top_value = std::max(z_threshold, de_threshold);
+    for (double v : z) if (std::isfinite(v)) top_value = std::max(top_value, v);
+    for (double v : de) if (std::isfinite(v)) top_value = std::max(top_value, v);
+    bottom.y.range(0, 1.1 * top_value);
+    bottom.y_reference_lines = {z_threshold, de_threshold};
+    bottom.title = fmt::format("divergence per point (thresholds: max |z| {:g}, ΔE00 {:g})", z_threshold,
+                               de_threshold);
     twin::write_figure(fig, png.string());
     std::cout << fmt::format("\ndemo: plot written to {}\n", png.string());
   } catch (...) {
