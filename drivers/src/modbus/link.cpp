@@ -154,11 +154,17 @@ template <typename Op>
 void ModbusLink::transact(int unit, const char* what, std::uint16_t address,
                           Clock::time_point deadline, const std::function<void()>& before_send,
                           Op op) {
-  std::unique_lock lock(mutex_, std::defer_lock);
-  if (!lock.try_lock_until(deadline))
-    throw Error(Errc::timeout,
-                fmt::format("{}: link busy with another request until the deadline", describe()),
-                config_.name);
+  // Another thread holds the link for at most one transaction (or a reconnection);
+  // wait for it until the deadline. (Polled: std::timed_mutex waits through
+  // pthread_mutex_clocklock, which thread sanitizers do not see.)
+  while (!mutex_.try_lock()) {
+    if (Clock::now() >= deadline)
+      throw Error(Errc::timeout,
+                  fmt::format("{}: link busy with another request until the deadline", describe()),
+                  config_.name);
+    std::this_thread::sleep_for(milliseconds(1));
+  }
+  std::unique_lock lock(mutex_, std::adopt_lock);
   int attempts = 0;
   while (true) {
     ensure_connected(deadline);

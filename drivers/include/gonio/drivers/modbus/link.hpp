@@ -91,7 +91,7 @@ class ModbusLink {
 
   LinkConfig config_;
   LinkTiming timing_;
-  mutable std::timed_mutex mutex_;
+  mutable std::mutex mutex_;
   modbus_t* ctx_ = nullptr;
   bool connected_ = false;
   Clock::time_point next_attempt_{};
