@@ -70,6 +70,15 @@ std::string_view rest_of_line(std::string_view line, std::string_view key) {
   return tab::LineReader::trimmed(line);
 }
 
+// Free text on one line: control characters become spaces, ends trimmed (the reader applies
+// the same rule, so names round-trip).
+std::string one_line(std::string_view in) {
+  std::string s(tab::LineReader::trimmed(in));
+  for (auto& c : s)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
+  return std::string(tab::LineReader::trimmed(s));
+}
+
 std::vector<double> read_numbers(const tab::LineReader& r, const std::vector<std::string_view>& t,
                                  std::string_view key) {
   if (t.size() < 2) r.fail(fmt::format("{} needs at least one value", key), key);
@@ -168,7 +177,7 @@ void read_meta_entry(tab::LineReader& r, Meta& m, std::string_view line,
     check_range(r, v, key, lo, hi);
     m.p[k] = std::move(v);
   } else if (key == "NAME") {
-    m.name = std::string(rest_of_line(line, key));
+    m.name = one_line(rest_of_line(line, key));
   } else if (key == "SOURCE_TYPE") {
     if (t.size() != 2 || (t[1] != "measured" && t[1] != "generated" && t[1] != "edited"))
       r.fail("SOURCE_TYPE is measured, generated or edited", key);
@@ -322,11 +331,6 @@ std::string list_text(const std::vector<double>& v) {
   return s;
 }
 
-std::string one_line(std::string s) {
-  std::replace(s.begin(), s.end(), '\n', ' ');
-  std::replace(s.begin(), s.end(), '\r', ' ');
-  return s;
-}
 
 void write_values(std::ostream& os, const std::vector<double>& values, std::size_t ch,
                   bool binary, const std::vector<double>* p2, const std::vector<double>* p3,

@@ -181,6 +181,12 @@ TEST(Ssdd, CommentsAndCrlfAreAccepted) {
       "PARAM3_LIST 0\r\nDATA ascii\r\n# PARAM3: 0\r\n0.1\r\n\r\n  0.2  \r\n");
   ASSERT_TRUE(parts.brdf);
   EXPECT_DOUBLE_EQ(parts.brdf->values()[1], 0.2);
+  // Control characters inside a NAME read as spaces, as the writer writes them.
+  const auto named = read_text(
+      "VERSION 0.2\nDATA_TYPE brdf\nCOLOR_MODEL monochrome\nPARAM_TYPE "
+      "spherical_coordinate_system\nPARAM0_LIST 0\nPARAM2_LIST 0\nPARAM3_LIST 0\n"
+      "NAME  red\r\x01paint \r\nDATA ascii\n0.1\n");
+  EXPECT_EQ(named.name, "red  paint");
 }
 
 std::string with(std::string s, const std::string& from, const std::string& to) {
