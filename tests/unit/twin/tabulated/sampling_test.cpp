@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "gonio/twin/tabulated.hpp"
-#include "tab_helpers.hpp"
+#include "tab_testing.hpp"
 
 namespace gonio::twin {
 namespace {

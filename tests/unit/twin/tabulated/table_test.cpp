@@ -8,7 +8,7 @@
 
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/tabulated.hpp"
-#include "tab_helpers.hpp"
+#include "tab_testing.hpp"
 
 namespace gonio::twin {
 namespace {

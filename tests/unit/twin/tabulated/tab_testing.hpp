@@ -1,4 +1,4 @@
-// Helpers for the tabulated-BSDF tests: small analytic models written here (independent of
+// Test support for the tabulated-BSDF tests: small analytic models written here (independent of
 // the model family), direction builders for every parametrization, a chi-square goodness
 // of fit test, and a scratch directory.
 #pragma once
