@@ -647,8 +647,8 @@ int run_modbus_sim(const nlohmann::json& config, std::ostream& out, const std::a
   const auto cfg = ModbusSimConfig::from_json(config);
   ModbusSim sim(cfg);
   sim.start();
-  if (cfg.tcp_host) out << "modbus tcp " << *cfg.tcp_host << ':' << sim.tcp_port() << '\n';
-  if (cfg.rtu) out << "modbus rtu " << sim.rtu_path() << '\n';
+  if (cfg.tcp_host) out << "modbus-tcp " << *cfg.tcp_host << ':' << sim.tcp_port() << '\n';
+  if (cfg.rtu) out << "modbus-rtu " << sim.rtu_path() << '\n';
   out.flush();
   while (!stop.load()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
   sim.stop();

@@ -197,9 +197,9 @@ TEST(MotionDevsim, RunModbusSimPrintsEndpointsAndServes) {
   std::string text;
   ASSERT_TRUE(wait_until([&] {
     text = buf.snapshot();
-    return text.find("modbus rtu /dev/pts/") != std::string::npos;
+    return text.find("modbus-rtu /dev/pts/") != std::string::npos;
   }));
-  const auto at = text.find("modbus tcp 127.0.0.1:");
+  const auto at = text.find("modbus-tcp 127.0.0.1:");
   ASSERT_NE(at, std::string::npos) << text;
   const int port = std::stoi(text.substr(at + 21));
   probe::ModbusAxisOptions o;

@@ -170,7 +170,8 @@ class ModbusSim {
 };
 
 // The gonio-devsim entry: builds a simulator from `config`, prints one line per endpoint
-// to `out` ("modbus tcp 127.0.0.1:5020", "modbus rtu /dev/pts/7"), serves until `stop`
+// to `out` ("modbus-tcp 127.0.0.1:5020", "modbus-rtu /dev/pts/7", as gonio-devsim prints
+// them), serves until `stop`
 // becomes true (checked every 50 ms) and returns 0. Config errors throw gonio::Error.
 int run_modbus_sim(const nlohmann::json& config, std::ostream& out, const std::atomic<bool>& stop);
 
