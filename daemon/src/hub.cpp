@@ -54,33 +54,52 @@ void Hub::remove(std::uint64_t session) {
   entries_.erase(session);
 }
 
-void Hub::publish(Topic topic, std::string_view method, const nlohmann::json& params,
-                  std::optional<std::int64_t> scan) {
-  std::vector<std::shared_ptr<rpc::Session>> targets;
-  {
-    std::lock_guard lock(mu_);
-    for (auto it = entries_.begin(); it != entries_.end();) {
-      auto s = it->second.session.lock();
-      if (!s) {
-        it = entries_.erase(it);
-        continue;
-      }
-      const auto& e = it->second;
-      const bool scan_ok = !scan || !e.scan || *e.scan == *scan ||
-                           (topic != Topic::progress && topic != Topic::points);
-      if (e.topics.contains(topic) && scan_ok) targets.push_back(std::move(s));
-      ++it;
+std::vector<std::shared_ptr<rpc::Session>> Hub::targets(Topic topic, std::optional<std::int64_t> scan) {
+  std::vector<std::shared_ptr<rpc::Session>> out;
+  std::lock_guard lock(mu_);
+  for (auto it = entries_.begin(); it != entries_.end();) {
+    auto s = it->second.session.lock();
+    if (!s) {
+      it = entries_.erase(it);
+      continue;
     }
+    const auto& e = it->second;
+    const bool scan_ok = !scan || !e.scan || *e.scan == *scan ||
+                         (topic != Topic::progress && topic != Topic::points);
+    if (e.topics.contains(topic) && scan_ok) out.push_back(std::move(s));
+    ++it;
   }
-  if (targets.empty()) return;
-  const auto text = std::make_shared<const std::string>(rpc::notification(method, params));
+  return out;
+}
+
+void Hub::deliver(const std::vector<std::shared_ptr<rpc::Session>>& to,
+                  const std::shared_ptr<const std::string>& text) {
   std::uint64_t refused = 0;
-  for (const auto& s : targets)
+  for (const auto& s : to)
     if (!s->push(text)) ++refused;
   if (refused) {
     std::lock_guard lock(mu_);
     dropped_ += refused;
   }
+}
+
+void Hub::publish(Topic topic, std::string_view method, const nlohmann::json& params,
+                  std::optional<std::int64_t> scan) {
+  const auto to = targets(topic, scan);
+  if (to.empty()) return;
+  deliver(to, std::make_shared<const std::string>(rpc::notification(method, params)));
+}
+
+void Hub::publish_raw(Topic topic, std::string_view method, const std::string& params_json,
+                      std::optional<std::int64_t> scan) {
+  const auto to = targets(topic, scan);
+  if (to.empty()) return;
+  std::string text = R"({"jsonrpc":"2.0","method":)";
+  text += nlohmann::json(method).dump();
+  text += R"(,"params":)";
+  text += params_json;
+  text += '}';
+  deliver(to, std::make_shared<const std::string>(std::move(text)));
 }
 
 std::size_t Hub::sessions() const {

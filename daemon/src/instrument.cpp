@@ -612,8 +612,9 @@ void Instrument::step() {
   p.finished_at = utc::now();
 
   // Commit before the next move.
+  const std::string point_text = json(p).dump();
   try {
-    store_.insert_point(p);
+    store_.insert_point(p, point_text);
   } catch (const Error& e) {
     if (e.code() == Errc::invalid_state) {
       spdlog::warn("scan {}: {}; skipping it", r.scan.id, e.what());  // never store twice
@@ -633,7 +634,7 @@ void Instrument::step() {
     if (overhead_ms_.size() > 1000) overhead_ms_.pop_front();
   }
 
-  hub_.publish(Topic::points, "scan.point", json(p), r.scan.id);
+  hub_.publish_raw(Topic::points, "scan.point", point_text, r.scan.id);
   if (p.diverged) {
     alerts_.raise(AlertDraft{std::string(alert_kind::divergence), Severity::warning,
                              fmt::format("divergence:scan:{}", r.scan.id), r.scan.id, r.sample_id,

@@ -338,16 +338,21 @@ void register_methods(rpc::Dispatcher& d, Services& s) {
     const auto offset = read_offset(r);
     const auto limit = read_count(r, "limit", 100, kMaxPage);
     r.finish();
-    const auto scan = require_scan(s.store, id);
-    json points = json::array();
-    for (const auto& text : s.store.point_json(id, offset, limit)) points.push_back(json::parse(text));
-    const auto next = offset + points.size();
-    return json{{"scan", id},
-                {"offset", offset},
-                {"points", std::move(points)},
-                {"points_done", scan.points_done},
-                {"points_total", scan.points_total},
-                {"next_offset", next < scan.points_done ? json(next) : json(nullptr)}};
+    // Served from the stored JSON text as it is: no parse, no print (scan.points is what
+    // clients poll).
+    const auto progress = s.store.scan_progress(id);
+    if (!progress) throw Error(Errc::not_found, fmt::format("scan: scan {} does not exist", id), "scan");
+    const auto texts = s.store.point_json(id, offset, limit);
+    const auto next = offset + texts.size();
+    std::string out = fmt::format(R"({{"scan":{},"offset":{},"points_done":{},"points_total":{},"next_offset":{},"points":[)",
+                                  id, offset, progress->first, progress->second,
+                                  next < progress->first ? std::to_string(next) : "null");
+    for (std::size_t i = 0; i < texts.size(); ++i) {
+      if (i) out += ',';
+      out += texts[i];
+    }
+    out += "]}";
+    return rpc::RawJson{std::move(out)};
   });
 
   add("scan.export", Role::viewer, true, [&s](rpc::Call& c) {

@@ -77,6 +77,19 @@ json response(const json& id, json result) {
   return json{{"jsonrpc", "2.0"}, {"result", std::move(result)}, {"id", id}};
 }
 
+std::string response_text(const json& id, Result result) {
+  if (auto* j = std::get_if<json>(&result)) return response(id, std::move(*j)).dump();
+  const auto& raw = std::get<RawJson>(result).text;
+  std::string out;
+  out.reserve(raw.size() + 48);
+  out += R"({"jsonrpc":"2.0","result":)";
+  out += raw;
+  out += R"(,"id":)";
+  out += id.dump();
+  out += '}';
+  return out;
+}
+
 std::string notification(std::string_view method, const json& params) {
   return json{{"jsonrpc", "2.0"}, {"method", method}, {"params", params}}.dump();
 }
@@ -106,7 +119,7 @@ void Session::set_principal(Principal p) {
 
 struct Dispatcher::Pending {
   std::mutex mu;
-  std::vector<std::optional<json>> slots;
+  std::vector<std::optional<std::string>> slots;
   std::size_t remaining = 0;
   std::function<void(std::string)> reply;
 };
@@ -161,7 +174,7 @@ void Dispatcher::handle(std::string_view text, const std::shared_ptr<Session>& s
     pending->remaining = message.size();
     pending->reply = std::move(reply);
     for (std::size_t i = 0; i < message.size(); ++i) {
-      handle_one(message[i], session, [pending, i](std::optional<json> r) {
+      handle_one(message[i], session, [pending, i](std::optional<std::string> r) {
         std::function<void(std::string)> finish;
         {
           std::lock_guard lock(pending->mu);
@@ -169,25 +182,25 @@ void Dispatcher::handle(std::string_view text, const std::shared_ptr<Session>& s
           if (--pending->remaining == 0) finish = std::move(pending->reply);
         }
         if (!finish) return;
-        json out = json::array();
+        std::string out;
         for (auto& s : pending->slots)
-          if (s) out.push_back(std::move(*s));
-        finish(out.empty() ? std::string() : out.dump());
+          if (s) out += (out.empty() ? "[" : ",") + *s;
+        finish(out.empty() ? std::string() : out + "]");
       });
     }
     return;
   }
-  handle_one(message, session, [reply = std::move(reply)](std::optional<json> r) {
-    reply(r ? r->dump() : std::string());
+  handle_one(message, session, [reply = std::move(reply)](std::optional<std::string> r) {
+    reply(r ? std::move(*r) : std::string());
   });
 }
 
 void Dispatcher::handle_one(const json& req, const std::shared_ptr<Session>& session,
-                            std::function<void(std::optional<json>)> done) const {
+                            std::function<void(std::optional<std::string>)> done) const {
   ++requests_;
   const auto fail = [&](const json& id, json error) {
     ++errors_;
-    done(error_response(id, std::move(error)));
+    done(error_response(id, std::move(error)).dump());
   };
   if (!req.is_object()) {
     fail(nullptr, error_object(code::invalid_request, "a request must be a JSON object",
@@ -251,14 +264,14 @@ void Dispatcher::handle_one(const json& req, const std::shared_ptr<Session>& ses
     }
   }
   // From here on, notifications get no answer whatever happens.
-  const auto finish = [this, is_notification, id, done](std::optional<json> result,
+  const auto finish = [this, is_notification, id, done](std::optional<Result> result,
                                                        std::optional<json> error) {
     if (error) ++errors_;
     if (is_notification) {
       done(std::nullopt);
       return;
     }
-    done(error ? error_response(id, std::move(*error)) : response(id, std::move(*result)));
+    done(error ? error_response(id, std::move(*error)).dump() : response_text(id, std::move(*result)));
   };
   const auto it = methods_.find(name);
   if (it == methods_.end()) {
@@ -292,7 +305,7 @@ void Dispatcher::handle_one(const json& req, const std::shared_ptr<Session>& ses
               finish]() mutable {
     Call call{session, std::move(who), name, params};
     try {
-      json result = method.handler(call);
+      Result result = method.handler(call);
       finish(std::move(result), std::nullopt);
     } catch (const Error& e) {
       if (e.code() == Errc::internal) spdlog::error("rpc {}: {}", name, e.what());

@@ -494,6 +494,14 @@ std::optional<Scan> Store::scan(std::int64_t id) const {
   return read_scan(s);
 }
 
+std::optional<std::pair<std::size_t, std::size_t>> Store::scan_progress(std::int64_t id) const {
+  auto c = read();
+  Stmt s(*c, "SELECT points_done, points_total FROM scans WHERE id = ?");
+  s.bind(1, id);
+  if (!s.step()) return std::nullopt;
+  return std::make_pair(static_cast<std::size_t>(s.i64(0)), static_cast<std::size_t>(s.i64(1)));
+}
+
 std::vector<Scan> Store::scans(const ScanFilter& f) const {
   auto c = read();
   Stmt s(*c, fmt::format("SELECT {} FROM scans WHERE (?1 IS NULL OR state = ?1) AND "
@@ -610,8 +618,9 @@ std::vector<std::int64_t> Store::recover_running(const std::string& reason) {
 
 // ---- points ----------------------------------------------------------------------------
 
-void Store::insert_point(const PointRecord& p) {
-  const std::string data = json(p).dump();
+void Store::insert_point(const PointRecord& p) { insert_point(p, json(p).dump()); }
+
+void Store::insert_point(const PointRecord& p, const std::string& data) {
   std::lock_guard lock(write_mu_);
   Transaction t(*writer_);
   try {

@@ -47,6 +47,9 @@ class Hub {
   // `scan` restricts delivery to sessions that subscribed without a scan filter or to it.
   void publish(Topic topic, std::string_view method, const nlohmann::json& params,
                std::optional<std::int64_t> scan = std::nullopt);
+  // The same with params already serialised (spliced in unchanged).
+  void publish_raw(Topic topic, std::string_view method, const std::string& params_json,
+                   std::optional<std::int64_t> scan = std::nullopt);
 
   std::size_t sessions() const;
   std::uint64_t dropped() const;  // notifications refused by full or closed sessions
@@ -57,6 +60,10 @@ class Hub {
     std::set<Topic> topics;
     std::optional<std::int64_t> scan;
   };
+  std::vector<std::shared_ptr<rpc::Session>> targets(Topic topic, std::optional<std::int64_t> scan);
+  void deliver(const std::vector<std::shared_ptr<rpc::Session>>& to,
+               const std::shared_ptr<const std::string>& text);
+
   mutable std::mutex mu_;
   std::map<std::uint64_t, Entry> entries_;
   std::uint64_t dropped_ = 0;

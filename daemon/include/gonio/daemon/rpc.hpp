@@ -23,6 +23,7 @@
 #include <mutex>
 #include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -96,7 +97,13 @@ struct Call {
   const nlohmann::json& params;  // always an object ({} when absent)
 };
 
-using Handler = std::function<nlohmann::json(Call&)>;
+// An already serialised JSON value, spliced into the response as it is (for results built
+// from stored JSON text, which need not be parsed and printed again).
+struct RawJson {
+  std::string text;
+};
+using Result = std::variant<nlohmann::json, RawJson>;
+using Handler = std::function<Result(Call&)>;
 
 struct Method {
   std::string name;
@@ -127,8 +134,9 @@ class Dispatcher {
 
  private:
   struct Pending;
+  // `done` gets the serialised response object, or nullopt for none.
   void handle_one(const nlohmann::json& request, const std::shared_ptr<Session>& session,
-                  std::function<void(std::optional<nlohmann::json>)> done) const;
+                  std::function<void(std::optional<std::string>)> done) const;
 
   Executor blocking_;
   std::map<std::string, Method, std::less<>> methods_;
@@ -137,6 +145,8 @@ class Dispatcher {
 
 // A response object for `id` with `result`.
 nlohmann::json response(const nlohmann::json& id, nlohmann::json result);
+// The same, serialised; a RawJson result is spliced in unchanged.
+std::string response_text(const nlohmann::json& id, Result result);
 // A notification text {"jsonrpc":"2.0","method":..,"params":..}.
 std::string notification(std::string_view method, const nlohmann::json& params);
 

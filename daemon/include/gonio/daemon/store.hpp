@@ -87,6 +87,8 @@ class Store {
   // ---- scans
   Scan insert_scan(const ScanPlan& plan, bool predicted, const std::string& actor);
   std::optional<Scan> scan(std::int64_t id) const;
+  // (points_done, points_total) without reading the plan.
+  std::optional<std::pair<std::size_t, std::size_t>> scan_progress(std::int64_t id) const;
   std::vector<Scan> scans(const ScanFilter& filter) const;
   // Waiting scans (queued, paused, interrupted) in queue order.
   std::vector<Scan> queue() const;
@@ -108,6 +110,8 @@ class Store {
   // Inserts the point and updates the scan's counters in one transaction. Throws
   // Error(invalid_state) when that point is already stored.
   void insert_point(const PointRecord& p);
+  // The same with the point's JSON text already made (the runner also notifies with it).
+  void insert_point(const PointRecord& p, const std::string& json_text);
   std::vector<PointRecord> points(std::int64_t scan_id, std::size_t offset, std::size_t limit) const;
   // Raw JSON text of points (what scan.points serves without re-encoding).
   std::vector<std::string> point_json(std::int64_t scan_id, std::size_t offset,
