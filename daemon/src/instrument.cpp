@@ -264,7 +264,22 @@ void Instrument::loop() {
         continue;
       }
       lock.unlock();
-      step();
+      try {
+        step();
+      } catch (const std::exception& e) {
+        // A bug, not a device: fail the scan rather than the daemon.
+        std::int64_t id = 0;
+        {
+          std::lock_guard l2(mu_);
+          id = run_ ? run_->scan.id : 0;
+        }
+        spdlog::error("scan {}: internal error: {}", id, e.what());
+        alerts_.raise(AlertDraft{std::string(alert_kind::scan_failed), Severity::critical,
+                                 fmt::format("scan_failed:scan:{}", id), id, std::nullopt,
+                                 std::nullopt, fmt::format("scan {} failed: {}", id, e.what())});
+        std::lock_guard sched(sched_mu_);
+        finish_run(ScanState::failed, fmt::format("internal error: {}", e.what()), "goniod");
+      }
       continue;
     }
     if (auto_resume_ && Clock::now() >= auto_resume_->second) {

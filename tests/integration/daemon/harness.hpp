@@ -330,6 +330,7 @@ struct MockOptions {
   std::string true_sample = kTrueSample;
   double time_scale = 0;
   std::string faults;          // TOML inline table body, e.g. "garbage_at_point = 3"
+  std::string lab;             // more keys of the mock lab ([instrument.motion])
   std::string extra;           // more TOML appended
   bool tcp = true, http = true;
 };
@@ -342,6 +343,7 @@ inline std::string mock_config(const MockOptions& o) {
   if (o.http) s << "\"http://127.0.0.1:0\"";
   s << "]\n\n[instrument.motion]\ndriver = \"mock\"\nsample = \"" << o.true_sample << "\"\ntime_scale = " << o.time_scale << "\n";
   if (!o.faults.empty()) s << "faults = { " << o.faults << " }\n";
+  s << o.lab;
   s << "\n[instrument.photometer]\ndriver = \"mock\"\n\n[twin]\nthreads = 1\nrel_se = 0.01\nreplicates = 8\n\n" << o.extra;
   return s.str();
 }

@@ -126,5 +126,25 @@ TEST(Alerts, DivergenceRaisesDedupedAlertsDeliveredByWebhookWithRetries) {
   EXPECT_EQ(hook["failed"], 0);
 }
 
+TEST(Alerts, ReferenceWhiteDriftRaisesAHealthAlert) {
+  TempDir dir;
+  MockOptions o;
+  o.lab = "lamp_drift_per_s = 0.02\n";  // 2 % per virtual second; a point takes about 0.4 s
+  Goniod g(dir.path, mock_config(o));
+  auto c = g.unix_conn();
+  const auto id = submit(c, "tile", kTrueSample, json{{"grids", {"in=45;out=-60:60:10"}}});
+  const auto sc = wait_state(c, id, {"completed", "paused"});
+  ASSERT_EQ(sc["state"], "completed");
+  // The reference is read with every point, so β itself stays right …
+  EXPECT_EQ(sc["points_diverged"], 0);
+  // … but the lamp's drift is reported.
+  const auto alerts = c.call("alert.list", json{{"scan", id}});
+  ASSERT_EQ(alerts.size(), 1u) << alerts.dump();
+  EXPECT_EQ(alerts[0]["kind"], "reference_drift");
+  EXPECT_EQ(alerts[0]["severity"], "warning");
+  const auto last = c.call("scan.points", json{{"scan", id}, {"offset", 12}, {"limit", 1}})["points"][0];
+  EXPECT_NE(std::find(last["flags"].begin(), last["flags"].end(), "reference_drift"), last["flags"].end());
+}
+
 }  // namespace
 }  // namespace gonio::test
