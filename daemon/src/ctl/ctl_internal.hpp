@@ -56,7 +56,7 @@ struct DemoOptions {
   std::string goniod;       // empty: next to gonioctl
   std::string output;       // PNG path; empty: <state-dir>/demo.png
   bool keep_serving = false;
-  double time_scale = 0.1;  // the mock's real-time factor for motion (0: as fast as it computes)
+  double time_scale = 0.25; // the mock's real-time factor for motion (0: as fast as it computes)
 };
 int run_demo(const DemoOptions& d, const Options& o);
 

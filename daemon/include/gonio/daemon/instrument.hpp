@@ -147,6 +147,7 @@ class Instrument {
   // Statistics (under mu_).
   std::uint64_t points_measured_ = 0;
   std::deque<double> overhead_ms_;  // the last 1000 points
+  mutable std::optional<std::pair<std::uint64_t, nlohmann::json>> stats_cache_;  // per points_measured_
 };
 
 }  // namespace gonio::daemon
