@@ -12,12 +12,15 @@
 #include <cairo-pdf.h>
 #include <cairo-svg.h>
 #include <cairo.h>
+#include <dlfcn.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <numbers>
 
 #include <fmt/format.h>
@@ -25,6 +28,31 @@
 #include "gonio/proto/error.hpp"
 
 namespace gonio::twin {
+namespace detail {
+
+#if defined(__SANITIZE_ADDRESS__)
+// Sanitizer builds only: cairo's toy-font cache and fontconfig's configuration live for the
+// whole process and LeakSanitizer reports them at exit. Release them first (cairo documents
+// cairo_debug_reset_static_data for memory checkers; FcFini is looked up at run time since
+// fontconfig is only an indirect dependency). Handlers run in reverse order of
+// registration, so this one runs before the leak check.
+void release_font_caches_at_exit() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    std::atexit([] {
+      cairo_debug_reset_static_data();
+      using FcFiniFn = void (*)();
+      if (void* sym = ::dlsym(RTLD_DEFAULT, "FcFini"))
+        reinterpret_cast<FcFiniFn>(sym)();
+    });
+  });
+}
+#else
+void release_font_caches_at_exit() {}
+#endif
+
+}  // namespace detail
+
 namespace {
 
 using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
@@ -44,6 +72,7 @@ struct Rect {
 // ---- text ------------------------------------------------------------------------------
 
 void font(cairo_t* cr, double size, bool bold = false) {
+  detail::release_font_caches_at_exit();
   cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL,
                          bold ? CAIRO_FONT_WEIGHT_BOLD : CAIRO_FONT_WEIGHT_NORMAL);
   cairo_set_font_size(cr, size);

@@ -31,6 +31,9 @@
 #include "gonio/twin/color.hpp"
 
 namespace gonio::twin {
+namespace detail {
+void release_font_caches_at_exit();  // plot.cpp: frees font caches in sanitizer builds
+}  // namespace detail
 namespace {
 
 // SplitMix64 (Steele, Lea & Flood, "Fast splittable pseudorandom number generators",
@@ -114,6 +117,7 @@ void draw_captions(Image& img, int size, int band, const RenderOptions& o) {
     cairo_set_source_rgb(cr.get(), kBackground[0] / 255.0, kBackground[1] / 255.0,
                          kBackground[2] / 255.0);
     cairo_paint(cr.get());
+    detail::release_font_caches_at_exit();
     cairo_select_font_face(cr.get(), "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL,
                            CAIRO_FONT_WEIGHT_NORMAL);
     cairo_set_font_size(cr.get(), std::max(9.0, 0.42 * band));
