@@ -1,0 +1,161 @@
+// gonio-twin as a user runs it: a real process, its exit code, stdout and files.
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Run {
+  int code = -1;
+  std::string out, err;
+};
+
+// Runs gonio-twin with `args` (a shell-quoted string); stderr goes to a temp file.
+Run gonio_twin(const std::string& args) {
+  const auto err_path = fs::temp_directory_path() / ("gonio-twin-err-" + std::to_string(::getpid()));
+  const std::string cmd = std::string(GONIO_BIN_DIR) + "/gonio-twin " + args + " 2>" + err_path.string();
+  Run r;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  if (!p) return r;
+  char buf[4096];
+  std::size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  const int status = ::pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream e(err_path);
+  r.err.assign(std::istreambuf_iterator<char>(e), {});
+  fs::remove(err_path);
+  return r;
+}
+
+class TempDir {
+ public:
+  TempDir() : path_(fs::temp_directory_path() / ("gonio-twin-test-" + std::to_string(::getpid()))) {
+    fs::create_directories(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+TEST(GonioTwinCli, PredictJsonHasEveryDocumentedField) {
+  const auto r = gonio_twin(
+      "predict --bsdf lambert:albedo=0.6 --grid 'in=45;out=-30:30:30' --wavelengths 400:700:100 "
+      "--rel-se 0.01 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j.size(), 3u);
+  for (const auto& p : j) {
+    for (const char* key : {"geometry", "wavelengths_nm", "radiance_factor", "std_error",
+                            "samples", "seconds", "diagnostics"})
+      EXPECT_TRUE(p.contains(key)) << key;
+    EXPECT_EQ(p["wavelengths_nm"].size(), 4u);
+    EXPECT_NEAR(p["radiance_factor"][0].get<double>(), 0.6, 1e-9);
+    EXPECT_TRUE(p["diagnostics"].contains("seen_fraction"));
+  }
+  EXPECT_DOUBLE_EQ(j[0]["geometry"]["theta_r"].get<double>(), -30);
+}
+
+TEST(GonioTwinCli, SameSeedSameAnswer) {
+  const std::string args =
+      "predict --bsdf conductor:alpha=0.05,eta=0.2,k=3.9 --in 30 --out 28 --wavelengths 550 --csv";
+  const auto a = gonio_twin(args + " --seed 7");
+  const auto b = gonio_twin(args + " --seed 7");
+  const auto c = gonio_twin(args + " --seed 8");
+  ASSERT_EQ(a.code, 0) << a.err;
+  EXPECT_EQ(a.out, b.out);
+  EXPECT_NE(a.out, c.out);
+}
+
+TEST(GonioTwinCli, BadValuesNameTheFieldAndExitTwo) {
+  auto r = gonio_twin("predict --bsdf lambert:albedo=0.5 --in 95 --out 0");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("theta_i = 95"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("[0, 89.9]"), std::string::npos) << r.err;
+  r = gonio_twin("predict --bsdf lambert:albedo=1.5");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("albedo"), std::string::npos) << r.err;
+  r = gonio_twin("predict --bsdf lambert:colour=1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("colour"), std::string::npos) << r.err;
+  r = gonio_twin("predict --bsdf lambert --wavelengths 100:700:10");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("wavelengths"), std::string::npos) << r.err;
+  r = gonio_twin("predict --bsdf @no/such/file.bsdf");
+  EXPECT_EQ(r.code, 3) << r.err;
+  r = gonio_twin("frobnicate");
+  EXPECT_EQ(r.code, 2);
+}
+
+TEST(GonioTwinCli, ErrorMapWritesCsvPlotAndSummary) {
+  TempDir dir;
+  const auto prefix = (dir.path() / "map").string();
+  const auto r = gonio_twin("error-map --bsdf conductor:alpha=0.05,eta=0.2,k=3.9 --grid "
+                            "'in=45;out=30:60:2' --wavelengths 400:700:100 --rel-se 0.005 "
+                            "--json --output " + prefix);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto s = nlohmann::json::parse(r.out);
+  // Aperture averaging flattens the specular peak.
+  EXPECT_LT(s["peak_error"]["45"].get<double>(), -0.05);
+  ASSERT_TRUE(fs::exists(prefix + ".csv"));
+  ASSERT_TRUE(fs::exists(prefix + ".png"));
+  std::ifstream png(prefix + ".png", std::ios::binary);
+  char magic[8];
+  png.read(magic, 8);
+  EXPECT_EQ(std::string(magic + 1, 3), "PNG");
+  std::ifstream csv(prefix + ".csv");
+  std::string line;
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, 1 + 16 * 4);  // header + geometries × channels
+}
+
+TEST(GonioTwinCli, PlanPrintsAGridThatParsesBack) {
+  const auto r = gonio_twin("plan --bsdf conductor:alpha=0.1,eta=0.2,k=3.9 --in 45 --range 0:80 "
+                            "--dense-step 1 --tolerance 0.02 --rel-se 0.002 --wavelengths 550");
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.out.rfind("in=45;out=0,", 0), 0u) << r.out;
+  const auto line = r.out.substr(0, r.out.find('\n'));
+  // Feed the plan back into predict: it must be accepted as a grid.
+  const auto p = gonio_twin("predict --bsdf lambert --wavelengths 550 --rel-se 0.01 --csv --grid '" + line + "'");
+  EXPECT_EQ(p.code, 0) << p.err;
+  EXPECT_NE(r.err.find("points instead of 81 dense"), std::string::npos) << r.err;
+}
+
+TEST(GonioTwinCli, ConvertRoundTripsThroughBothFormats) {
+  TempDir dir;
+  const auto ssdd = (dir.path() / "m.ssdd").string();
+  const auto issa = (dir.path() / "m.bsdf").string();
+  auto r = gonio_twin("convert --bsdf conductor:alpha=0.2,eta=0.2,k=3.9 --wavelengths 450,550,650 "
+                      "--rel-se 0.01 --theta-step 15 --phi-step 45 --output " + ssdd);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = gonio_twin("convert --input " + ssdd + " --output " + issa);
+  ASSERT_EQ(r.code, 0) << r.err;
+  // The converted table is a BSDF the twin can measure again.
+  r = gonio_twin("predict --bsdf @" + issa + " --in 30 --out 30 --wavelengths 550 --rel-se 0.01 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_GT(nlohmann::json::parse(r.out)[0]["radiance_factor"][0].get<double>(), 1.0);
+  r = gonio_twin("convert --input " + ssdd + " --output " + (dir.path() / "x.txt").string());
+  EXPECT_NE(r.code, 0);
+}
+
+TEST(GonioTwinCli, RenderWritesAPng) {
+  TempDir dir;
+  const auto png = (dir.path() / "s.png").string();
+  const auto r = gonio_twin("render --bsdf lambert:albedo=0.7 --wavelengths 450,550,650 --size 48 "
+                            "--spp 2 --theta-step 15 --phi-step 45 --rel-se 0.01 --output " + png);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_GT(fs::file_size(png), 500u);
+}
+
+}  // namespace
