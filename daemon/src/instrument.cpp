@@ -36,6 +36,20 @@ bool is_device_error(Errc c) {
   }
 }
 
+// Whether opening the devices failed on the driver tables themselves. not_found is one only
+// when it names a field (a preset) or a driver that does not exist; otherwise it is a device
+// that is not there yet (a serial node udev has not created, a photometer switched off).
+bool is_config_error(const Error& e, const Config& c) {
+  if (e.code() == Errc::invalid_argument || e.code() == Errc::out_of_range) return true;
+  if (e.code() != Errc::not_found) return false;
+  if (!e.field().empty()) return true;
+  const auto known = [](const json& side) {
+    const auto name = side.value("driver", std::string());
+    return std::ranges::any_of(drivers::drivers(), [&](const auto& d) { return d.name == name; });
+  };
+  return !known(c.motion) || !known(c.photometer);
+}
+
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
@@ -102,6 +116,10 @@ std::chrono::steady_clock::time_point Instrument::heartbeat() const {
   return Clock::time_point(Clock::duration(heartbeat_ns_.load()));
 }
 
+// Before every bounded wait of the runner thread, so that a healthy thread is never staler
+// than its longest single device call (a point makes several, homing one per axis).
+void Instrument::beat() { heartbeat_ns_ = Clock::now().time_since_epoch().count(); }
+
 // ---- devices ---------------------------------------------------------------------------
 
 void Instrument::open_devices() {
@@ -109,10 +127,15 @@ void Instrument::open_devices() {
     auto inst = drivers::open_instrument(json{{"motion", config_.motion},
                                               {"photometer", config_.photometer}});
     const auto axes = inst.motion->axes();
+    beat();
     const auto grid = inst.photometer->wavelengths(config_.measure_timeout);
+    beat();
     const auto identity = inst.photometer->identify(config_.measure_timeout).to_string();
     std::map<Axis, double> pos;
-    for (Axis a : axes) pos[a] = inst.motion->position(a, config_.move_timeout);
+    for (Axis a : axes) {
+      beat();
+      pos[a] = inst.motion->position(a, config_.move_timeout);
+    }
     {
       std::lock_guard lock(mu_);
       motion_ = std::move(inst.motion);
@@ -129,8 +152,7 @@ void Instrument::open_devices() {
                  config_.photometer.value("driver", "?"), grid.size(), grid.to_string());
     settle_state();
   } catch (const Error& e) {
-    if (e.code() == Errc::invalid_argument || e.code() == Errc::out_of_range ||
-        e.code() == Errc::not_found)
+    if (is_config_error(e, config_))
       throw Error(e.code(), fmt::format("instrument.{}", e.what()),
                   join_field("instrument", e.field()));
     bool changed = false;
@@ -228,7 +250,7 @@ std::optional<std::int64_t> Instrument::running_scan() const {
 
 void Instrument::loop() {
   for (;;) {
-    heartbeat_ns_ = Clock::now().time_since_epoch().count();
+    beat();
     std::unique_lock lock(mu_);
     if (stopping_) break;
     if (!commands_.empty()) {
@@ -454,6 +476,7 @@ void Instrument::move_arms(double incidence, double receive, std::optional<doubl
     if (know) cur_i = positions_[Axis::incidence], cur_r = positions_[Axis::receive];
   }
   const auto go = [&](Axis a, double target) {
+    beat();
     motion_->move(a, target, config_.move_timeout);
     std::lock_guard lock(mu_);
     positions_[a] = target;
@@ -500,6 +523,7 @@ void Instrument::step() {
   const auto t_start = Clock::now();
   double device_s = 0, twin_s = 0;
   const auto timed = [&](auto&& f) {
+    beat();
     const auto t0 = Clock::now();
     f();
     device_s += seconds_since(t0);
@@ -524,7 +548,10 @@ void Instrument::step() {
     if (has_rotation) rotation = g.phi_i;
     timed([&] {
       move_arms(g.theta_i, g.theta_r, rotation);
-      if (config_.settle.count() > 0) std::this_thread::sleep_for(config_.settle);
+      if (config_.settle.count() > 0) {
+        beat();
+        std::this_thread::sleep_for(config_.settle);
+      }
     });
     timed([&] { dark = photometer_->measure(Channel::dark, config_.measure_timeout); });
     read_reference = !r.reference || plan.reads_reference(r.since_start);
@@ -535,11 +562,10 @@ void Instrument::step() {
       r.reference_dark = dark;
     }
     timed([&] { sample = photometer_->measure(Channel::sample, config_.measure_timeout); });
-    timed([&] {
-      p.actual.theta_i = motion_->position(Axis::incidence, config_.move_timeout);
-      p.actual.theta_r = motion_->position(Axis::receive, config_.move_timeout);
-      if (has_rotation) p.actual.phi_i = p.actual.phi_r = motion_->position(Axis::rotation, config_.move_timeout);
-    });
+    timed([&] { p.actual.theta_i = motion_->position(Axis::incidence, config_.move_timeout); });
+    timed([&] { p.actual.theta_r = motion_->position(Axis::receive, config_.move_timeout); });
+    if (has_rotation)
+      timed([&] { p.actual.phi_i = p.actual.phi_r = motion_->position(Axis::rotation, config_.move_timeout); });
   } catch (const Error& e) {
     bool stop_requested = false;
     {
@@ -607,6 +633,7 @@ void Instrument::step() {
 
   // The twin's prediction, computed ahead; waiting for it is twin time, not ours.
   if (r.batch) {
+    beat();
     const auto t0 = Clock::now();
     try {
       const auto pred = r.batch->wait(gi);
@@ -887,7 +914,9 @@ json Instrument::home(std::vector<Axis> axes, const std::string& actor) {
     set_state("homing");
     try {
       for (Axis a : axes) {
+        beat();
         motion_->home(a, config_.home_timeout);
+        beat();
         const double pos = motion_->position(a, config_.move_timeout);
         std::lock_guard lock(mu_);
         positions_[a] = pos;
@@ -922,6 +951,7 @@ json Instrument::move(const std::map<Axis, double>& targets, const std::string& 
         move_arms(ti, tr, std::nullopt);
       for (const auto& [axis, deg] : targets) {
         if (axis == Axis::incidence || axis == Axis::receive) continue;
+        beat();
         motion_->move(axis, deg, config_.move_timeout);
         std::lock_guard lock(mu_);
         positions_[axis] = deg;
@@ -944,7 +974,10 @@ json Instrument::reset(const std::string& actor) {
       axes = axes_;
     }
     if (motion_->capabilities().alarm_reset)
-      for (Axis a : axes) motion_->reset_alarm(a, config_.move_timeout);
+      for (Axis a : axes) {
+        beat();
+        motion_->reset_alarm(a, config_.move_timeout);
+      }
     {
       std::lock_guard lock(mu_);
       fault_latched_ = false;

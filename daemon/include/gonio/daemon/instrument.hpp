@@ -77,7 +77,8 @@ class Instrument {
   // Runner statistics for system.info: points measured since start and the daemon's own
   // time per point (excluding motion, photometer and twin), in ms.
   nlohmann::json stats() const;
-  // Last time the runner thread went round its loop (for the systemd watchdog).
+  // Last sign of progress of the runner thread: a turn of its loop or the start of a device
+  // call or of a wait for the twin (for the systemd watchdog).
   std::chrono::steady_clock::time_point heartbeat() const;
   // Called with a one-line status on scan transitions (sd_notify STATUS). Set before start().
   void set_status_listener(std::function<void(const std::string&)> f) {
@@ -102,6 +103,7 @@ class Instrument {
   void settle_state(std::string detail = {});  // "fault" while latched, else "idle"
   void publish_state();
   void move_arms(double incidence, double receive, std::optional<double> rotation);
+  void beat();
   nlohmann::json positions_json() const;
   void publish_progress();
 
