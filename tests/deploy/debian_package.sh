@@ -9,7 +9,7 @@ source "$(dirname "$0")/common.sh"
 for tool in cpack dpkg-deb dpkg-shlibdeps file; do
   command -v "$tool" >/dev/null || skip "$tool not found: .ci/bootstrap installs cmake, dpkg-dev and file"
 done
-[[ -d $root$bindir ]] || { fail "the installed tree is missing (deploy.install did not run?)"; finish; }
+[[ -d $root$bindir ]] || { fail "the installed tree is missing (deploy.install_tree did not run?)"; finish; }
 
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT

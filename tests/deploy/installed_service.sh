@@ -7,7 +7,7 @@ source "$(dirname "$0")/common.sh"
 
 [[ -e /dev/gonio ]] && skip "this machine has /dev/gonio: not starting goniod on real devices"
 unit=$root$unitdir/goniod.service
-[[ -f $unit ]] || { fail "$unit is missing (deploy.install did not run?)"; finish; }
+[[ -f $unit ]] || { fail "$unit is missing (deploy.install_tree did not run?)"; finish; }
 
 tmp=$(mktemp -d)
 pid=""

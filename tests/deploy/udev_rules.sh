@@ -6,7 +6,7 @@ source "$(dirname "$0")/common.sh"
 
 rules=$root$rulesdir/70-gonio.rules
 config=$root$confdir/goniod.toml
-[[ -f $rules && -f $config ]] || { fail "rules or configuration missing (deploy.install did not run?)"; finish; }
+[[ -f $rules && -f $config ]] || { fail "rules or configuration missing (deploy.install_tree did not run?)"; finish; }
 
 match_only=" ACTION DEVPATH KERNEL KERNELS SUBSYSTEM SUBSYSTEMS DRIVER DRIVERS ATTR ATTRS SYSCTL TAGS TEST PROGRAM RESULT CONST "
 assign_only=" OWNER GROUP MODE LABEL GOTO RUN OPTIONS IMPORT SECLABEL "
