@@ -77,8 +77,14 @@ Instrument open_instrument(const nlohmann::json& config) {
   r.finish();
   if (m == nullptr) throw Error::invalid("motion", "is required");
   if (p == nullptr) throw Error::invalid("photometer", "is required");
-  auto [mname, mcfg] = split(*m, "motion");
-  auto [pname, pcfg] = split(*p, "photometer");
+  // Plain variables, not structured bindings: lambdas below capture them (C++20 allows
+  // capturing bindings only from clang 16).
+  auto motion_split = split(*m, "motion");
+  auto photometer_split = split(*p, "photometer");
+  const std::string mname = std::move(motion_split.first);
+  const nlohmann::json mcfg = std::move(motion_split.second);
+  const std::string pname = std::move(photometer_split.first);
+  const nlohmann::json pcfg = std::move(photometer_split.second);
   const auto wrap = [](const std::string& prefix, auto&& f) {
     try {
       return f();
