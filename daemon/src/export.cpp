@@ -13,6 +13,7 @@
 
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/bsdf_io.hpp"
+#include "gonio/twin/color.hpp"
 #include "gonio/twin/tabulated.hpp"
 
 namespace gonio::daemon {
@@ -124,8 +125,11 @@ ExportResult export_scan(const Scan& scan, const std::vector<PointRecord>& point
     const auto comment = fmt::format("gonio scan {} (sample {}), measured BRDF f = beta/pi",
                                      scan.id, scan.plan.sample_id);
     if (format == "bsdf") {
+      // IS-SA Monochrome holds one value per node: the luminance factor of the spectrum.
       twin::IssaWriteOptions o;
-      o.comment = comment;
+      o.weights = twin::luminance_weights(table.wavelengths());
+      o.comment = o.weights.empty() ? comment
+                                    : comment + "; Monochrome = luminance factor (D65, 10 deg)";
       twin::write_issa(os, table, false, o);
     } else {
       twin::TabulatedParts parts;

@@ -149,6 +149,21 @@ TEST(GonioTwinCli, ConvertRoundTripsThroughBothFormats) {
   EXPECT_NE(r.code, 0);
 }
 
+TEST(GonioTwinCli, ConvertToIssaWritesTheLuminanceFactor) {
+  // Green-poor white: the plain channel mean is 0.6, the luminance factor (ȳ-weighted,
+  // dominated by 550 nm) is near 0.3.
+  TempDir dir;
+  const auto issa = (dir.path() / "l.bsdf").string();
+  auto r = gonio_twin("convert --bsdf lambert:albedo=450:0.8,550:0.2,650:0.8 --wavelengths 450,550,650 "
+                      "--rel-se 0.01 --theta-step 15 --phi-step 45 --output " + issa);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = gonio_twin("predict --bsdf @" + issa + " --in 30 --out 0 --wavelengths 550 --rel-se 0.01 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const double beta = nlohmann::json::parse(r.out)[0]["radiance_factor"][0].get<double>();
+  EXPECT_GT(beta, 0.2);
+  EXPECT_LT(beta, 0.4);
+}
+
 TEST(GonioTwinCli, RenderWritesAPng) {
   TempDir dir;
   const auto png = (dir.path() / "s.png").string();

@@ -8,9 +8,24 @@
 #include "cli/output.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/bsdf_io.hpp"
+#include "gonio/twin/color.hpp"
 #include "gonio/twin/virtual_measurement.hpp"
 
 namespace gonio::twin::cli {
+namespace {
+
+// A spectral table written as monochrome IS-SA carries its luminance factor (CIE 15:2004 §7:
+// ȳ(λ)·D65(λ) weights), rather than a plain mean that counts 400 nm like 555 nm.
+IssaWriteOptions luminance_weighted(const TabulatedParts& parts) {
+  IssaWriteOptions o;
+  const BsdfTable* t = parts.brdf ? &*parts.brdf : parts.btdf ? &*parts.btdf : nullptr;
+  if (t != nullptr) o.weights = luminance_weights(t->wavelengths());
+  if (!o.weights.empty())
+    o.comment = "Monochrome = luminance factor: channels weighted by CIE 1964 10 deg y-bar x D65";
+  return o;
+}
+
+}  // namespace
 
 void add_convert(CLI::App& app) {
   auto* sub = app.add_subcommand(
@@ -45,7 +60,7 @@ void add_convert(CLI::App& app) {
         parts.name = table->spec();
       }
       try {
-        write_bsdf_file(*output, parts);
+        write_bsdf_file(*output, parts, luminance_weighted(parts));
       } catch (const Error& e) {
         if (e.code() == Errc::not_found) throw Error(Errc::io_error, e.what(), "output");
         throw;

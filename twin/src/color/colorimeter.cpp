@@ -9,6 +9,7 @@
 // L*a*b* (100, 0, 0) whatever the grid; a grid coarser than the tables' 5 nm loses some
 // accuracy (twin/colorimetry.md quantifies it).
 #include <cmath>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -112,6 +113,25 @@ double delta_e2000(const Spectrum& s1, const Spectrum& s2, std::string_view illu
                    ObserverKind observer) {
   return delta_e2000(spectrum_to_lab(s1, illuminant, observer),
                      spectrum_to_lab(s2, illuminant, observer));
+}
+
+std::vector<double> luminance_weights(const std::vector<double>& wavelengths_nm) {
+  if (wavelengths_nm.size() < 2) return {};
+  std::optional<Colorimeter> c;
+  try {
+    c.emplace(WavelengthGrid(wavelengths_nm));
+  } catch (const Error&) {
+    return {};  // no overlap with the colour-matching functions
+  }
+  std::vector<double> w;
+  double sum = 0;
+  for (const auto& x : c->weights()) {
+    w.push_back(x.y);
+    sum += x.y;
+  }
+  if (!(sum > 0)) return {};
+  for (auto& v : w) v /= sum;
+  return w;
 }
 
 }  // namespace gonio::twin

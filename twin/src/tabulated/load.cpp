@@ -48,7 +48,8 @@ BsdfPtr load_bsdf_file(const std::string& path, const WavelengthGrid& grid) {
   return std::make_shared<TabulatedBsdf>(grid, read_bsdf_file(path), "@" + path);
 }
 
-void write_bsdf_file(const std::string& path, const TabulatedParts& parts) {
+void write_bsdf_file(const std::string& path, const TabulatedParts& parts,
+                     const IssaWriteOptions& issa) {
   const std::string ext = extension(path);
   if (ext == ".ssdd") return write_ssdd(path, parts);
   if (ext != ".bsdf")
@@ -67,7 +68,7 @@ void write_bsdf_file(const std::string& path, const TabulatedParts& parts) {
                             path),
                 "path");
   if (!parts.brdf && !parts.btdf) throw Error::invalid("parts", "hold no BRDF or BTDF");
-  write_issa(path, parts.brdf ? *parts.brdf : *parts.btdf, !parts.brdf);
+  write_issa(path, parts.brdf ? *parts.brdf : *parts.btdf, !parts.brdf, issa);
 }
 
 }  // namespace gonio::twin

@@ -1,9 +1,11 @@
 // Colorimetry: tables from colord-data, XYZ / CIELAB of spectra, sRGB, and errors.
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -207,6 +209,24 @@ TEST(Colorimetry, ColorimeterChecksItsInput) {
   // One channel: weights exist, white is still Y = 100.
   const Colorimeter one(WavelengthGrid::parse("555"));
   EXPECT_NEAR(one.white().y, 100, 1e-9);
+}
+
+TEST(Colorimetry, LuminanceWeightsGiveTheLuminanceFactor) {
+  const auto w = luminance_weights(kVisible.values());
+  ASSERT_EQ(w.size(), kVisible.size());
+  double sum = 0, y = 0;
+  std::vector<double> r;
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    // A reddish spectrum: its weighted mean must be its Y / 100, not its plain mean.
+    r.push_back(kVisible.values()[i] < 580 ? 0.1 : 0.9);
+    sum += w[i];
+    y += w[i] * r.back();
+  }
+  EXPECT_NEAR(sum, 1.0, 1e-12);
+  EXPECT_NEAR(y, Colorimeter(kVisible).xyz(r).y / 100, 1e-12);
+  EXPECT_GT(*std::max_element(w.begin(), w.end()), 10 * w.front());  // peaks near 555 nm
+  EXPECT_TRUE(luminance_weights({550}).empty());
+  EXPECT_TRUE(luminance_weights({1000, 1500, 2000}).empty());
 }
 
 TEST(Colorimetry, ParsesObserverNames) {

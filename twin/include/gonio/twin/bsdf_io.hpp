@@ -86,7 +86,8 @@ TabulatedParts read_merl(const std::string& path);
 // .bsdf → read_issa, .ssdd → read_ssdd, .binary → read_merl (case-insensitive).
 TabulatedParts read_bsdf_file(const std::string& path);
 // .ssdd → write_ssdd (all parts); .bsdf → write_issa of the single BRDF or BTDF (a file with
-// both, or with specular parts, needs .ssdd: Error(unsupported)).
-void write_bsdf_file(const std::string& path, const TabulatedParts& parts);
+// both, or with specular parts, needs .ssdd: Error(unsupported)). `issa` applies to .bsdf.
+void write_bsdf_file(const std::string& path, const TabulatedParts& parts,
+                     const IssaWriteOptions& issa = {});
 
 }  // namespace gonio::twin

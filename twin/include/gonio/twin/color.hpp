@@ -144,6 +144,11 @@ double delta_e2000(const Lab& lab1, const Lab& lab2, double kl = 1, double kc = 
 double delta_e2000(const Spectrum& s1, const Spectrum& s2, std::string_view illuminant = "D65",
                    ObserverKind observer = ObserverKind::cie1964_10deg);
 
+// Per-channel weights, summing to 1, whose weighted mean of a reflectance (or BRDF) spectrum is
+// its luminance factor Y/100 for D65 and the 10° observer; empty when the grid has fewer than
+// two channels or misses the visible (then a plain mean is the only sensible grey).
+std::vector<double> luminance_weights(const std::vector<double>& wavelengths_nm);
+
 // sRGB (IEC 61966-2-1:1999). XYZ on the 0..1 scale (Y = 1 for the display white, D65,
 // CIE 1931 2° observer) to linear RGB; values outside [0, 1] are kept.
 Rgb xyz_to_linear_srgb(const Xyz& xyz);
