@@ -61,6 +61,7 @@ install(FILES ${PROJECT_SOURCE_DIR}/README.md
               ${PROJECT_SOURCE_DIR}/twin/bsdf_formats.md
               ${PROJECT_SOURCE_DIR}/twin/colorimetry.md
               ${PROJECT_SOURCE_DIR}/proto/scpi-gonio.md
+              ${PROJECT_SOURCE_DIR}/proto/errors.md
         DESTINATION ${CMAKE_INSTALL_DOCDIR})
 install(FILES ${PROJECT_SOURCE_DIR}/daemon/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR} RENAME daemon.md)
 install(FILES ${PROJECT_SOURCE_DIR}/drivers/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR} RENAME drivers.md)

@@ -20,7 +20,7 @@ expected=(
   "$mandir/man1/gonio-twin.1.gz" "$mandir/man1/gonio-probe.1.gz"
   "$docdir/README.md" "$docdir/daemon.md" "$docdir/drivers.md"
   "$docdir/bsdf_spec.md" "$docdir/bsdf_formats.md" "$docdir/colorimetry.md"
-  "$docdir/scpi-gonio.md"
+  "$docdir/scpi-gonio.md" "$docdir/errors.md"
   "$docdir/examples/goniod-hardware.toml" "$docdir/examples/goniod-mock.toml"
 )
 # The whole tree, both ways: nothing missing, nothing else (gonio-devsim and gonio-load are

@@ -18,6 +18,11 @@ int main(int argc, char** argv) {
   using namespace gonio::drivers::probe;
   CLI::App app{"gonio-probe: find and check goniometer devices without the daemon"};
   app.require_subcommand(1);
+  app.footer(
+      "Exit codes: 0 ok; 1 internal failure, or an interrupted move; 2 usage (nothing was sent);\n"
+      "3 device absent or unreachable; 4 timeout; 5 protocol error (the device answered nonsense);\n"
+      "6 device alarm (code printed; a following error is one), device error or saturation;\n"
+      "7 device busy or held by another program.");
   bool verbose = false;
   app.add_flag("-v,--verbose", verbose, "log every exchange with the device");
 
