@@ -1,9 +1,10 @@
 // goniod's JSON-RPC methods: parameter checking, roles, and calls into the services.
 #include "gonio/daemon/methods.hpp"
 
+#include <fcntl.h>
 #include <unistd.h>
 
-#include <fstream>
+#include <charconv>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -90,10 +91,25 @@ std::map<drivers::Axis, double> read_targets(ObjectReader& r) {
 }  // namespace
 
 std::size_t resident_bytes() {
-  std::ifstream in("/proc/self/statm");
-  std::size_t pages = 0, resident = 0;
-  if (!(in >> pages >> resident)) return 0;
-  return resident * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  // Kept open: a pread from offset 0 regenerates the file, one system call instead of a path
+  // lookup, an open, a stream and a close on every system.info.
+  static const int fd = ::open("/proc/self/statm", O_RDONLY | O_CLOEXEC);
+  static const auto page = static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
+  if (fd < 0) return 0;
+  char buf[128];
+  const auto n = ::pread(fd, buf, sizeof buf, 0);
+  if (n <= 0) return 0;
+  // "size resident shared text lib data dt"
+  const char* p = buf;
+  const char* const end = buf + n;
+  std::size_t fields[2] = {0, 0};
+  for (auto& f : fields) {
+    while (p < end && *p == ' ') ++p;
+    const auto [next, ec] = std::from_chars(p, end, f);
+    if (ec != std::errc()) return 0;
+    p = next;
+  }
+  return fields[1] * page;
 }
 
 void register_methods(rpc::Dispatcher& d, Services& s) {
@@ -158,36 +174,46 @@ void register_methods(rpc::Dispatcher& d, Services& s) {
   });
 
   // ---- system ----------------------------------------------------------------------------
-  add("system.info", Role::viewer, false, [&s](rpc::Call& c) {
+  // system.info is what monitors poll: the members fixed at start are serialised once, the
+  // others are written straight to text (no JSON tree per call). Members come in no
+  // particular order.
+  const auto fixed = [&s] {
+    std::string t = json{{"name", "goniod"},
+                         {"version", GONIO_VERSION},
+                         {"api_version", openrpc_document()["info"]["version"]},
+                         {"schema_version", Store::kSchemaVersion},
+                         {"started_at", s.started_at},
+                         {"state_dir", s.state_dir.string()},
+                         {"divergence", {{"z_threshold", s.config.z_threshold},
+                                         {"delta_e_threshold", s.config.delta_e_threshold},
+                                         {"sustained_m", s.config.sustained_m},
+                                         {"sustained_n", s.config.sustained_n},
+                                         {"reference_drift", s.config.reference_drift}}}}
+                        .dump();
+    t.back() = ',';  // the closing brace comes after the live members
+    return t;
+  }();
+  const auto twin_fixed =
+      fmt::format(R"("version":{},"threads":{})", json(s.twin.version()).dump(), s.twin.threads());
+  add("system.info", Role::viewer, false, [&s, fixed, twin_fixed](rpc::Call& c) {
     ObjectReader(c.params, "").finish();
     const auto uptime = std::chrono::duration<double>(std::chrono::steady_clock::now() - s.started).count();
     const auto running = s.instrument.running_scan();
-    json info{{"name", "goniod"},
-              {"version", GONIO_VERSION},
-              {"api_version", openrpc_document()["info"]["version"]},
-              {"schema_version", Store::kSchemaVersion},
-              {"started_at", s.started_at},
-              {"uptime_s", uptime},
-              {"state_dir", s.state_dir.string()},
-              {"running_scan", running ? json(*running) : json(nullptr)},
-              {"rss_bytes", resident_bytes()},
-              {"rpc", {{"requests", s.dispatcher ? s.dispatcher->requests() : 0},
-                       {"errors", s.dispatcher ? s.dispatcher->errors() : 0}}},
-              {"subscribers", s.hub.sessions()},
-              {"notifications_dropped", s.hub.dropped()},
-              {"runner", s.instrument.stats()},
-              {"twin", {{"version", s.twin.version()},
-                        {"threads", s.twin.threads()},
-                        {"queued", s.twin.queued()}}},
-              {"divergence", {{"z_threshold", s.config.z_threshold},
-                              {"delta_e_threshold", s.config.delta_e_threshold},
-                              {"sustained_m", s.config.sustained_m},
-                              {"sustained_n", s.config.sustained_n},
-                              {"reference_drift", s.config.reference_drift}}},
-              {"you", principal_json(c.principal)}};
-    if (auto sink = s.alerts.sink()) info["webhook"] = sink->stats();
-    if (s.transport_stats) info["transport"] = s.transport_stats();
-    return info;
+    std::string out;
+    out.reserve(fixed.size() + 1024);
+    out += fixed;
+    fmt::format_to(std::back_inserter(out),
+                   R"("uptime_s":{},"running_scan":{},"rss_bytes":{},"rpc":{{"requests":{},"errors":{}}},)"
+                   R"("subscribers":{},"notifications_dropped":{},"runner":{},)"
+                   R"("twin":{{{},"queued":{}}},"you":{})",
+                   uptime, running ? std::to_string(*running) : "null", resident_bytes(),
+                   s.dispatcher ? s.dispatcher->requests() : 0, s.dispatcher ? s.dispatcher->errors() : 0,
+                   s.hub.sessions(), s.hub.dropped(), s.instrument.stats().dump(), twin_fixed,
+                   s.twin.queued(), principal_json(c.principal).dump());
+    if (auto sink = s.alerts.sink()) (out += R"(,"webhook":)") += sink->stats().dump();
+    if (s.transport_stats) (out += R"(,"transport":)") += s.transport_stats().dump();
+    out += '}';
+    return rpc::RawJson{std::move(out)};
   });
 
   add("system.audit", Role::admin, false, [&s](rpc::Call& c) {
