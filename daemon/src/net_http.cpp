@@ -357,6 +357,8 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
         s.close(ignored);
       } else {
         ++self->st_->connections;
+        error_code ignored;
+        s.set_option(tcp::no_delay(true), ignored);  // a response is one write; see net_ndjson.cpp
         std::make_shared<HttpSession>(std::move(s), self->st_)->start();
       }
       self->accept();
