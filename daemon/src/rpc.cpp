@@ -78,12 +78,13 @@ json response(const json& id, json result) {
 }
 
 std::string response_text(const json& id, Result result) {
-  if (auto* j = std::get_if<json>(&result)) return response(id, std::move(*j)).dump();
-  const auto& raw = std::get<RawJson>(result).text;
+  // Spliced rather than built as one more JSON object around the result.
+  std::string body = std::holds_alternative<json>(result) ? std::get<json>(result).dump()
+                                                           : std::move(std::get<RawJson>(result).text);
   std::string out;
-  out.reserve(raw.size() + 48);
+  out.reserve(body.size() + 48);
   out += R"({"jsonrpc":"2.0","result":)";
-  out += raw;
+  out += body;
   out += R"(,"id":)";
   out += id.dump();
   out += '}';
@@ -195,7 +196,7 @@ void Dispatcher::handle(std::string_view text, const std::shared_ptr<Session>& s
   });
 }
 
-void Dispatcher::handle_one(const json& req, const std::shared_ptr<Session>& session,
+void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
                             std::function<void(std::optional<std::string>)> done) const {
   ++requests_;
   const auto fail = [&](const json& id, json error) {
@@ -243,7 +244,7 @@ void Dispatcher::handle_one(const json& req, const std::shared_ptr<Session>& ses
   const std::string name = m->get<std::string>();
   json params = json::object();
   if (const auto p = req.find("params"); p != req.end()) {
-    if (p->is_object()) params = *p;
+    if (p->is_object()) params = std::move(*p);
     else if (p->is_array() && p->empty()) params = json::object();
     else if (p->is_array()) {
       const auto reply = [&] {
@@ -264,7 +265,7 @@ void Dispatcher::handle_one(const json& req, const std::shared_ptr<Session>& ses
     }
   }
   // From here on, notifications get no answer whatever happens.
-  const auto finish = [this, is_notification, id, done](std::optional<Result> result,
+  auto finish = [this, is_notification, id, done = std::move(done)](std::optional<Result> result,
                                                        std::optional<json> error) {
     if (error) ++errors_;
     if (is_notification) {
@@ -302,7 +303,7 @@ void Dispatcher::handle_one(const json& req, const std::shared_ptr<Session>& ses
     return;
   }
   auto run = [&method, session, who = std::move(who), name, params = std::move(params),
-              finish]() mutable {
+              finish = std::move(finish)]() mutable {
     Call call{session, std::move(who), name, params};
     try {
       Result result = method.handler(call);

@@ -135,7 +135,7 @@ class Dispatcher {
  private:
   struct Pending;
   // `done` gets the serialised response object, or nullopt for none.
-  void handle_one(const nlohmann::json& request, const std::shared_ptr<Session>& session,
+  void handle_one(nlohmann::json& request, const std::shared_ptr<Session>& session,
                   std::function<void(std::optional<std::string>)> done) const;
 
   Executor blocking_;
