@@ -1,6 +1,8 @@
-// Hostile and clumsy clients: malformed, oversized and stalled messages, batches over a
-// socket, subscriptions on NDJSON and WebSocket.
+// Hostile and clumsy clients: malformed, oversized and stalled messages, batches and pipelined
+// requests over a socket, subscriptions on NDJSON and WebSocket.
 #include <gtest/gtest.h>
+
+#include <set>
 
 #include "harness.hpp"
 
@@ -40,6 +42,33 @@ TEST(Robustness, MalformedMessagesGetErrorsAndTheConnectionLives) {
   EXPECT_TRUE(r[0].contains("result"));
   EXPECT_EQ(r[1]["error"]["code"], -32601);
   EXPECT_TRUE(c.request("system.info").contains("result"));
+}
+
+TEST(Robustness, PipelinedRequestsAreAllAnswered) {
+  TempDir dir;
+  Goniod g(dir.path, mock_config({}));
+  const auto check = [](Conn c) {
+    // More than a connection keeps in flight, in one write: answers queue up behind each other.
+    constexpr int n = 100;
+    std::string lines;
+    for (int i = 1; i <= n; ++i)
+      lines += json{{"jsonrpc", "2.0"}, {"id", i}, {"method", i % 2 ? "system.info" : "auth.whoami"}}.dump() + "\n";
+    c.send_raw(lines);
+    std::set<int> ids;
+    for (int i = 0; i < n; ++i) {
+      const auto l = c.line();
+      ASSERT_TRUE(l.has_value()) << "answer " << i;
+      const auto r = json::parse(*l);
+      EXPECT_TRUE(r.contains("result")) << *l;
+      ids.insert(r["id"].get<int>());
+    }
+    EXPECT_EQ(ids.size(), static_cast<std::size_t>(n));
+    EXPECT_TRUE(c.request("system.info").contains("result"));
+  };
+  check(g.unix_conn());
+  auto tcp = g.tcp_conn();
+  tcp.call("auth.login", {{"token", g.admin_token()}});
+  check(std::move(tcp));
 }
 
 TEST(Robustness, OversizedMessagesAreRefusedAndTheConnectionClosed) {
