@@ -4,7 +4,7 @@
 //   - efficiency (1 / (variance × time)) of rqmc over baseline at the same geometry
 //     (target ≥ 50× for α ≤ 0.05);
 //   - a 1,000-geometry scan on 2 threads (target ≤ 10 s).
-// Run: build/release/bin/bench --benchmark_filter=Twin
+// Run: build/bench/bin/bench --benchmark_filter=Twin
 #include <benchmark/benchmark.h>
 
 #include <chrono>
