@@ -1,5 +1,6 @@
 // A whole scan on the mock through a real goniod: measured beside predicted, notifications,
-// paging, exports, samples without a BSDF, plan rejection, the queue.
+// paging, exports, samples without a BSDF, plan rejection, the queue, and that scan.state
+// notifications carry the reason that was stored.
 #include <gtest/gtest.h>
 
 #include "harness.hpp"
@@ -147,6 +148,81 @@ TEST(Scan, QueueOrderPauseResumeCancelAndNotBefore) {
   EXPECT_GT(done_at_pause, 0);
   for (std::size_t i = 0; i < pts.size(); ++i) EXPECT_EQ(pts[i]["index"], i);
   EXPECT_EQ(c.call("scan.get", json{{"scan", held}})["state"], "queued");  // its time has not come
+}
+
+// The next scan.state notification for `scan` entering `state`, skipping everything else.
+std::optional<json> next_scan_state(Conn& watcher, std::int64_t scan, const std::string& state) {
+  while (auto n = watcher.notification(10s)) {
+    if ((*n)["method"] == "scan.state" && (*n)["params"]["scan"] == scan &&
+        (*n)["params"]["state"] == state)
+      return (*n)["params"];
+  }
+  return std::nullopt;
+}
+
+TEST(Scan, StateNotificationsCarryTheReasonThatWasStored) {
+  TempDir dir;
+  MockOptions o;
+  o.time_scale = 0.05;
+  Goniod g(dir.path, mock_config(o));
+  auto c = g.unix_conn();
+  auto watcher = g.unix_conn();
+  watcher.call("subscribe", json{{"topics", {"state"}}});
+  c.call("sample.create", json{{"name", "s"}, {"bsdf", kTrueSample}});
+  const auto plan = json{{"sample", "s"}, {"grids", {"in=30;out=-60:60:5"}}};
+  const auto running = c.call("scan.submit", plan)["id"].get<std::int64_t>();
+  ASSERT_EQ(wait_state(c, running, {"running"})["state"], "running");
+  auto later = plan;
+  later["not_before"] = "2099-01-01T00:00:00Z";
+  const auto held = c.call("scan.submit", later)["id"].get<std::int64_t>();
+
+  // A queued scan paused without a reason: the stored reason names who paused it, and the
+  // notification says the same.
+  const auto paused = c.call("scan.pause", json{{"scan", held}});
+  ASSERT_EQ(paused["state"], "paused");
+  const auto stored = paused["reason"].get<std::string>();
+  EXPECT_NE(stored.find("paused by"), std::string::npos) << stored;
+  auto n = next_scan_state(watcher, held, "paused");
+  ASSERT_TRUE(n) << "no scan.state notification for the pause";
+  EXPECT_EQ((*n)["reason"], stored);
+  EXPECT_EQ(c.call("scan.get", json{{"scan", held}})["reason"], stored);
+
+  // Resuming it: "resumed by …", stored and published.
+  const auto queued = c.call("scan.resume", json{{"scan", held}});
+  n = next_scan_state(watcher, held, "queued");
+  ASSERT_TRUE(n);
+  EXPECT_NE(queued["reason"].get<std::string>().find("resumed by"), std::string::npos)
+      << queued.dump();
+  EXPECT_EQ((*n)["reason"], queued["reason"]);
+
+  // The running scan paused without a reason, applied by the runner after its point.
+  for (int i = 0; i < 400 && c.call("scan.get", json{{"scan", running}})["points_done"] == 0; ++i)
+    std::this_thread::sleep_for(25ms);
+  const auto paused_run = c.call("scan.pause", json{{"scan", running}});
+  ASSERT_EQ(paused_run["state"], "paused");
+  n = next_scan_state(watcher, running, "paused");
+  ASSERT_TRUE(n);
+  EXPECT_NE(paused_run["reason"].get<std::string>().find("paused by"), std::string::npos);
+  EXPECT_EQ((*n)["reason"], paused_run["reason"]);
+
+  // Resumed, it restarts where it stopped and says so in both places.
+  c.call("scan.resume", json{{"scan", running}});
+  n = next_scan_state(watcher, running, "running");
+  ASSERT_TRUE(n);
+  EXPECT_EQ((*n)["reason"].get<std::string>().rfind("resumed at point ", 0), 0u) << n->dump();
+  const auto now = c.call("scan.get", json{{"scan", running}});
+  if (now["state"] == "running") {
+    EXPECT_EQ((*n)["reason"], now["reason"]);
+  }
+
+  // A queued scan cancelled without a reason.
+  const auto cancelled = c.call("scan.cancel", json{{"scan", held}});
+  n = next_scan_state(watcher, held, "cancelled");
+  ASSERT_TRUE(n);
+  EXPECT_NE(cancelled["reason"].get<std::string>().find("cancelled by"), std::string::npos);
+  EXPECT_EQ((*n)["reason"], cancelled["reason"]);
+  c.call("scan.cancel", json{{"scan", running}});
+  EXPECT_EQ(g.stop(), 0);
 }
 
 }  // namespace

@@ -15,6 +15,15 @@
 // alert and latches the instrument: nothing else starts until a technician resumes a scan
 // or resets the instrument (or auto-resume, when configured, does it). instrument.stop
 // stops the arms at once from any thread and pauses the running scan.
+//
+// Every change of a scan's state goes through one private member, transition(), which
+// words the reason once, stores it and publishes the stored record, so that scan.state
+// notifications always say what scan.get says.
+//
+// The class is implemented in three files: instrument.cpp (thread, loop, devices, status),
+// instrument_run.cpp (one run: start, points, finish, device faults) and
+// instrument_commands.cpp (pause/resume/cancel, plan checks and the manual commands). The
+// arithmetic of a point is in point_reduction.hpp, the plan rules in plan_check.hpp.
 #pragma once
 
 #include <atomic>
@@ -37,6 +46,7 @@
 #include "gonio/daemon/config.hpp"
 #include "gonio/daemon/divergence.hpp"
 #include "gonio/daemon/hub.hpp"
+#include "gonio/daemon/plan_check.hpp"
 #include "gonio/daemon/store.hpp"
 #include "gonio/daemon/twin_service.hpp"
 #include "gonio/drivers/collision.hpp"
@@ -97,6 +107,13 @@ class Instrument {
   void start_run(const Scan& scan);
   void step();                        // measures one point of the current run
   void finish_run(ScanState state, const std::string& reason, const std::string& actor);
+  // The one place a scan changes state: words the reason (an empty `reason` becomes "paused
+  // by <actor>", "cancelled by <actor>" or "resumed by <actor>" for those states), stores it
+  // and publishes scan.state with the stored state and reason. Returns the stored scan.
+  // Callers hold sched_mu_.
+  Scan transition(std::int64_t id, ScanState to, const std::string& reason,
+                  const std::string& actor);
+  DeviceFacts device_facts() const;  // for check_plan
   void on_device_fault(const Error& e);
   nlohmann::json submit(std::function<nlohmann::json()> fn);
   void set_state(std::string state, std::string detail = {});

@@ -1,0 +1,258 @@
+// Instrument, part 3: what other threads ask of the instrument (see instrument.hpp) —
+// scheduler control (pause, resume, cancel) and the one function that changes a scan's
+// state, plan checks against the devices at hand, and the manual commands (home, move,
+// reset, run on the runner thread; stop, immediate from any thread).
+#include <algorithm>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "gonio/daemon/instrument.hpp"
+#include "gonio/daemon/plan_check.hpp"
+#include "gonio/proto/error.hpp"
+
+namespace gonio::daemon {
+
+using drivers::Axis;
+using nlohmann::json;
+
+namespace {
+
+// The reason stored with a state: the one given, else who did it for the states people
+// bring about.
+std::string worded_reason(ScanState to, const std::string& reason, const std::string& actor) {
+  if (!reason.empty()) return reason;
+  switch (to) {
+    case ScanState::paused: return fmt::format("paused by {}", actor);
+    case ScanState::cancelled: return fmt::format("cancelled by {}", actor);
+    case ScanState::queued: return fmt::format("resumed by {}", actor);
+    default: return {};
+  }
+}
+
+}  // namespace
+
+// ---- scheduler operations ---------------------------------------------------------------
+
+Scan Instrument::transition(std::int64_t id, ScanState to, const std::string& reason,
+                            const std::string& actor) {
+  store_.set_scan_state(id, to, worded_reason(to, reason, actor), actor);
+  auto sc = store_.scan(id);
+  if (!sc) throw Error(Errc::not_found, fmt::format("scan {} does not exist", id), "scan");
+  hub_.publish(Topic::state, "scan.state",
+               json{{"scan", id}, {"state", to_string(sc->state)}, {"reason", sc->reason}}, id);
+  return *sc;
+}
+
+Scan Instrument::pause(std::int64_t id, const std::string& actor, const std::string& reason) {
+  std::unique_lock sched(sched_mu_);
+  auto sc = store_.scan(id);
+  if (!sc) throw Error(Errc::not_found, fmt::format("scan {} does not exist", id), "scan");
+  {
+    std::unique_lock lock(mu_);
+    if (running_ == id) {
+      control_ = Control::pause;
+      control_reason_ = reason;
+      control_actor_ = actor;
+      sched.unlock();
+      cv_.notify_all();
+      cv_.wait_for(lock, std::chrono::seconds(60), [&] { return running_ != id; });
+      lock.unlock();
+      return *store_.scan(id);
+    }
+  }
+  if (sc->state == ScanState::paused) return *sc;
+  if (sc->state != ScanState::queued && sc->state != ScanState::interrupted)
+    throw Error(Errc::invalid_state,
+                fmt::format("scan {} is {}; only queued, running or interrupted scans can be "
+                            "paused",
+                            id, to_string(sc->state)),
+                "scan");
+  return transition(id, ScanState::paused, reason, actor);
+}
+
+Scan Instrument::resume(std::int64_t id, const std::string& actor) {
+  std::lock_guard sched(sched_mu_);
+  auto sc = store_.scan(id);
+  if (!sc) throw Error(Errc::not_found, fmt::format("scan {} does not exist", id), "scan");
+  if (sc->state != ScanState::paused)
+    throw Error(Errc::invalid_state,
+                fmt::format("scan {} is {}; only paused scans can be resumed{}", id,
+                            to_string(sc->state),
+                            sc->state == ScanState::interrupted ? " (interrupted ones resume by "
+                                                                  "themselves)"
+                                                                : ""),
+                "scan");
+  auto queued = transition(id, ScanState::queued, "", actor);
+  {
+    std::lock_guard lock(mu_);
+    // A technician's resume is the acknowledgement that the instrument is fit again.
+    fault_latched_ = false;
+    fault_reason_.clear();
+    if (auto_resume_ && auto_resume_->first == id) auto_resume_.reset();
+  }
+  cv_.notify_all();
+  return queued;
+}
+
+Scan Instrument::cancel(std::int64_t id, const std::string& actor, const std::string& reason) {
+  std::unique_lock sched(sched_mu_);
+  auto sc = store_.scan(id);
+  if (!sc) throw Error(Errc::not_found, fmt::format("scan {} does not exist", id), "scan");
+  {
+    std::unique_lock lock(mu_);
+    if (running_ == id) {
+      control_ = Control::cancel;
+      control_reason_ = reason;
+      control_actor_ = actor;
+      sched.unlock();
+      cv_.notify_all();
+      cv_.wait_for(lock, std::chrono::seconds(60), [&] { return running_ != id; });
+      lock.unlock();
+      return *store_.scan(id);
+    }
+  }
+  if (is_final(sc->state))
+    throw Error(Errc::invalid_state,
+                fmt::format("scan {} is already {}", id, to_string(sc->state)), "scan");
+  return transition(id, ScanState::cancelled, reason, actor);
+}
+
+DeviceFacts Instrument::device_facts() const {
+  std::lock_guard lock(mu_);
+  return DeviceFacts{axes_, photometer_grid_};
+}
+
+void Instrument::validate_plan(const ScanPlan& plan) const {
+  check_plan(plan, guard_, device_facts());
+}
+
+// ---- commands --------------------------------------------------------------------------
+
+json Instrument::submit(std::function<json()> fn) {
+  auto cmd = std::make_shared<Command>();
+  cmd->fn = std::move(fn);
+  auto fut = cmd->done.get_future();
+  {
+    std::lock_guard lock(mu_);
+    if (stopping_) throw Error(Errc::invalid_state, "goniod is stopping");
+    if (running_)
+      throw Error(Errc::busy,
+                  fmt::format("the instrument is running scan {}; pause it first", *running_));
+    if (!motion_ || !photometer_)
+      throw Error(Errc::disconnected, fmt::format("the instrument is unavailable: {}", open_error_));
+    commands_.push_back(cmd);
+  }
+  cv_.notify_all();
+  return fut.get();
+}
+
+json Instrument::home(std::vector<Axis> axes, const std::string& actor) {
+  return submit([this, axes, actor]() mutable {
+    if (axes.empty()) {
+      std::lock_guard lock(mu_);
+      axes = axes_;
+    }
+    store_.audit(actor, "instrument.home", "", json{{"axes", [&] {
+                                                      json a = json::array();
+                                                      for (Axis x : axes) a.push_back(drivers::axis_name(x));
+                                                      return a;
+                                                    }()}});
+    set_state("homing");
+    try {
+      for (Axis a : axes) {
+        beat();
+        motion_->home(a, config_.home_timeout);
+        beat();
+        const double pos = motion_->position(a, config_.move_timeout);
+        std::lock_guard lock(mu_);
+        positions_[a] = pos;
+      }
+    } catch (const Error& e) {
+      settle_state(e.what());
+      throw;
+    }
+    settle_state();
+    return status();
+  });
+}
+
+json Instrument::move(const std::map<Axis, double>& targets, const std::string& actor) {
+  // Limits and the collision zone are checked before the instrument thread is bothered.
+  for (const auto& [axis, deg] : targets) guard_.check_limits(axis, deg);
+  return submit([this, targets, actor] {
+    json detail = json::object();
+    for (const auto& [axis, deg] : targets) detail[std::string(drivers::axis_name(axis))] = deg;
+    store_.audit(actor, "instrument.move", "", detail);
+    double i = 0, r = 0;
+    {
+      std::lock_guard lock(mu_);
+      i = positions_.contains(Axis::incidence) ? positions_[Axis::incidence] : 0;
+      r = positions_.contains(Axis::receive) ? positions_[Axis::receive] : 0;
+    }
+    const auto ti = targets.contains(Axis::incidence) ? targets.at(Axis::incidence) : i;
+    const auto tr = targets.contains(Axis::receive) ? targets.at(Axis::receive) : r;
+    set_state("moving");
+    try {
+      if (targets.contains(Axis::incidence) || targets.contains(Axis::receive))
+        move_arms(ti, tr, std::nullopt);
+      for (const auto& [axis, deg] : targets) {
+        if (axis == Axis::incidence || axis == Axis::receive) continue;
+        beat();
+        motion_->move(axis, deg, config_.move_timeout);
+        std::lock_guard lock(mu_);
+        positions_[axis] = deg;
+      }
+    } catch (const Error& e) {
+      settle_state(e.what());
+      throw;
+    }
+    settle_state();
+    return status();
+  });
+}
+
+json Instrument::reset(const std::string& actor) {
+  return submit([this, actor] {
+    store_.audit(actor, "instrument.reset", "", json::object());
+    std::vector<Axis> axes;
+    {
+      std::lock_guard lock(mu_);
+      axes = axes_;
+    }
+    if (motion_->capabilities().alarm_reset)
+      for (Axis a : axes) {
+        beat();
+        motion_->reset_alarm(a, config_.move_timeout);
+      }
+    {
+      std::lock_guard lock(mu_);
+      fault_latched_ = false;
+      fault_reason_.clear();
+    }
+    set_state("idle");
+    cv_.notify_all();
+    return status();
+  });
+}
+
+json Instrument::stop(const std::string& actor) {
+  std::optional<std::int64_t> scan;
+  {
+    std::lock_guard lock(mu_);
+    if (!motion_) throw Error(Errc::disconnected, fmt::format("the instrument is unavailable: {}", open_error_));
+    motion_->stop(std::chrono::milliseconds(2000));
+    if (running_) {
+      scan = running_;
+      control_ = Control::pause;
+      control_reason_ = fmt::format("stopped by {}", actor);
+      control_actor_ = actor;
+    }
+  }
+  cv_.notify_all();
+  store_.audit(actor, "instrument.stop", scan ? fmt::format("scan:{}", *scan) : "", json::object());
+  spdlog::warn("instrument: stopped by {}{}", actor, scan ? fmt::format(" (scan {} pauses)", *scan) : "");
+  return json{{"stopped", true}, {"scan", scan ? json(*scan) : json(nullptr)}};
+}
+
+}  // namespace gonio::daemon

@@ -1,0 +1,402 @@
+// Instrument, part 2: one run of a scan on the runner thread (see instrument.hpp) — start
+// (predictions ahead, resume point), one point per step (arms, readings, reduction to β,
+// reference drift, divergence from the twin, commit, alerts, notifications), finish, device
+// faults, and moving the arms in an order that keeps them clear of each other.
+#include <algorithm>
+#include <cmath>
+#include <thread>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "gonio/daemon/instrument.hpp"
+#include "gonio/daemon/point_reduction.hpp"
+#include "gonio/proto/error.hpp"
+#include "instrument_run.hpp"
+
+namespace gonio::daemon {
+
+using drivers::Axis;
+using drivers::Channel;
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+bool is_device_error(Errc c) {
+  switch (c) {
+    case Errc::timeout:
+    case Errc::disconnected:
+    case Errc::device_alarm:
+    case Errc::protocol_error:
+    case Errc::saturated:
+    case Errc::busy:
+    case Errc::limit_violation:
+    case Errc::unsupported: return true;
+    default: return false;
+  }
+}
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+}  // namespace
+
+void Instrument::start_run(const Scan& scan) {
+  auto r = std::make_unique<Run>();
+  r->scan = scan;
+  r->window = SustainedWindow(config_.sustained_m, config_.sustained_n);
+  r->next = static_cast<std::size_t>(store_.next_point_index(scan.id));
+  const auto sample = store_.sample(scan.plan.sample_id);
+  r->tolerance = sample ? sample->spec.tolerance : 0;
+  r->sample_id = scan.plan.sample_id;
+  if (!sample || !sample->spec.bsdf) {
+    r->prediction_note = "the sample has no reference BSDF: measured without predictions";
+  } else {
+    try {
+      auto tw = twin_.make(*sample->spec.bsdf, scan.plan.wavelengths, "sample.bsdf");
+      if (r->next < scan.points_total)
+        r->batch = twin_.batch(std::move(tw), scan.plan.geometries, scan.plan.geometry_index(r->next));
+    } catch (const Error& e) {
+      r->prediction_note = fmt::format("no predictions: {}", e.what());
+      spdlog::warn("scan {}: {}", scan.id, r->prediction_note);
+    }
+  }
+  r->colorimeter = colorimeter_for(scan.plan.wavelengths);
+  r->drift = ReferenceDriftMonitor(divergence_.reference_drift);
+  const auto resumed = r->next > 0;
+  const auto next = r->next;
+  r->scan.state = ScanState::running;
+  const auto note = r->prediction_note;
+  {
+    std::lock_guard lock(mu_);
+    run_ = std::move(r);
+    running_ = scan.id;
+    control_ = Control::none;
+  }
+  // The run is in place before the state is published, so that whoever reacts to it finds
+  // the scan running.
+  try {
+    transition(scan.id, ScanState::running,
+               resumed ? fmt::format("resumed at point {}", next) : std::string(), "goniod");
+  } catch (...) {
+    std::unique_ptr<Run> dropped;
+    {
+      std::lock_guard lock(mu_);
+      dropped = std::move(run_);
+      running_.reset();
+    }
+    if (dropped && dropped->batch) dropped->batch->cancel();
+    throw;
+  }
+  spdlog::info("scan {}: {} ({} points{}){}", scan.id, resumed ? "resumed" : "started",
+               scan.points_total, resumed ? fmt::format(", from point {}", next) : "",
+               note.empty() ? "" : "; " + note);
+  set_state("scanning", fmt::format("scan {}", scan.id));
+  if (status_listener_) status_listener_(fmt::format("scan {} running", scan.id));
+  // A scan whose every point is stored (crash after the last commit) completes at once.
+  if (run_->next >= scan.points_total) finish_run(ScanState::completed, "", "goniod");
+}
+
+void Instrument::finish_run(ScanState state, const std::string& reason, const std::string& actor) {
+  std::unique_ptr<Run> r;
+  {
+    std::lock_guard lock(mu_);
+    r = std::move(run_);
+    running_.reset();
+  }
+  if (!r) return;
+  if (r->batch) r->batch->cancel();
+  std::optional<Scan> sc;
+  try {
+    sc = transition(r->scan.id, state, reason, actor);
+    spdlog::info("scan {}: {}{}", r->scan.id, to_string(state),
+                 sc->reason.empty() ? "" : ": " + sc->reason);
+  } catch (const Error& e) {
+    spdlog::error("scan {}: cannot record state {}: {}", r->scan.id, to_string(state), e.what());
+  }
+  if (sc)
+    hub_.publish(Topic::progress, "scan.progress",
+                 json{{"scan", sc->id},
+                      {"state", to_string(sc->state)},
+                      {"reason", sc->reason},
+                      {"points_done", sc->points_done},
+                      {"points_total", sc->points_total},
+                      {"points_diverged", sc->points_diverged},
+                      {"eta_s", 0.0}},
+                 sc->id);
+  settle_state();
+  if (status_listener_)
+    status_listener_(fmt::format("scan {} {}", r->scan.id, to_string(state)));
+  cv_.notify_all();  // pause()/cancel() wait for this
+}
+
+void Instrument::on_device_fault(const Error& e) {
+  std::int64_t id = 0;
+  {
+    std::lock_guard lock(mu_);
+    id = run_ ? run_->scan.id : 0;
+    fault_latched_ = true;
+    fault_reason_ = fmt::format("{} ({})", e.what(), e.id());
+  }
+  const auto reason = fmt::format("device fault: {} ({}); a technician must resume", e.what(), e.id());
+  spdlog::error("scan {}: {}", id, reason);
+  alerts_.raise(AlertDraft{std::string(alert_kind::device_fault), Severity::critical,
+                           fmt::format("device_fault:scan:{}", id), id, std::nullopt,
+                           std::nullopt, fmt::format("scan {} paused: {}", id, reason)});
+  {
+    std::lock_guard sched(sched_mu_);
+    finish_run(ScanState::paused, reason, "goniod");
+  }
+  std::lock_guard lock(mu_);
+  if (config_.auto_resume && id != 0 && auto_resumes_[id] < config_.max_auto_resumes) {
+    ++auto_resumes_[id];
+    auto_resume_ = std::make_pair(id, Clock::now() + config_.auto_resume_delay);
+  }
+}
+
+void Instrument::move_arms(double incidence, double receive, std::optional<double> rotation) {
+  double cur_i = 0, cur_r = 0;
+  bool know = false;
+  {
+    std::lock_guard lock(mu_);
+    know = positions_.contains(Axis::incidence) && positions_.contains(Axis::receive);
+    if (know) cur_i = positions_[Axis::incidence], cur_r = positions_[Axis::receive];
+  }
+  const auto go = [&](Axis a, double target) {
+    beat();
+    motion_->move(a, target, config_.move_timeout);
+    std::lock_guard lock(mu_);
+    positions_[a] = target;
+  };
+  if (!know || std::abs(cur_i - incidence) > 1e-9 || std::abs(cur_r - receive) > 1e-9) {
+    // Move the arms one at a time, in the order that keeps them apart all the way.
+    bool incidence_first = true;
+    if (know) {
+      try {
+        guard_.check_move(Axis::incidence, cur_i, incidence, cur_r);
+        guard_.check_move(Axis::receive, cur_r, receive, incidence);
+      } catch (const Error&) {
+        guard_.check_move(Axis::receive, cur_r, receive, cur_i);
+        guard_.check_move(Axis::incidence, cur_i, incidence, receive);
+        incidence_first = false;
+      }
+    }
+    if (incidence_first) {
+      if (!know || std::abs(cur_i - incidence) > 1e-9) go(Axis::incidence, incidence);
+      if (!know || std::abs(cur_r - receive) > 1e-9) go(Axis::receive, receive);
+    } else {
+      go(Axis::receive, receive);
+      go(Axis::incidence, incidence);
+    }
+  }
+  if (rotation) {
+    double cur = 0;
+    bool have = false;
+    {
+      std::lock_guard lock(mu_);
+      have = positions_.contains(Axis::rotation);
+      if (have) cur = positions_[Axis::rotation];
+    }
+    if (!have || std::abs(cur - *rotation) > 1e-9) go(Axis::rotation, *rotation);
+  }
+}
+
+void Instrument::step() {
+  Run& r = *run_;
+  const ScanPlan& plan = r.scan.plan;
+  const std::size_t idx = r.next;
+  const std::size_t gi = plan.geometry_index(idx);
+  const Geometry& g = plan.geometries[gi];
+  const auto t_start = Clock::now();
+  double device_s = 0, twin_s = 0;
+  const auto timed = [&](auto&& f) {
+    beat();
+    const auto t0 = Clock::now();
+    f();
+    device_s += seconds_since(t0);
+  };
+
+  PointRecord p;
+  p.scan_id = r.scan.id;
+  p.index = static_cast<std::int64_t>(idx);
+  p.geometry_index = static_cast<std::int64_t>(gi);
+  p.repeat = static_cast<int>(idx % static_cast<std::size_t>(plan.repeats));
+  p.planned = g;
+  p.started_at = utc::now();
+  drivers::Reading dark, sample;
+  bool read_reference = false;
+  bool has_rotation = false;
+  {
+    std::lock_guard lock(mu_);
+    has_rotation = std::find(axes_.begin(), axes_.end(), Axis::rotation) != axes_.end();
+  }
+  try {
+    std::optional<double> rotation;
+    if (has_rotation) rotation = g.phi_i;
+    timed([&] {
+      move_arms(g.theta_i, g.theta_r, rotation);
+      if (config_.settle.count() > 0) {
+        beat();
+        std::this_thread::sleep_for(config_.settle);
+      }
+    });
+    timed([&] { dark = photometer_->measure(Channel::dark, config_.measure_timeout); });
+    read_reference = !r.reference || plan.reads_reference(r.since_start);
+    if (read_reference) {
+      drivers::Reading ref;
+      timed([&] { ref = photometer_->measure(Channel::reference, config_.measure_timeout); });
+      r.reference = std::move(ref);
+      r.reference_dark = dark;
+    }
+    timed([&] { sample = photometer_->measure(Channel::sample, config_.measure_timeout); });
+    timed([&] { p.actual.theta_i = motion_->position(Axis::incidence, config_.move_timeout); });
+    timed([&] { p.actual.theta_r = motion_->position(Axis::receive, config_.move_timeout); });
+    if (has_rotation)
+      timed([&] { p.actual.phi_i = p.actual.phi_r = motion_->position(Axis::rotation, config_.move_timeout); });
+  } catch (const Error& e) {
+    bool stop_requested = false;
+    {
+      std::lock_guard lock(mu_);
+      stop_requested = control_ == Control::pause;
+    }
+    if (e.code() == Errc::invalid_state && stop_requested) return;  // loop applies the pause
+    if (is_device_error(e.code()) || e.code() == Errc::invalid_state) {
+      on_device_fault(e);
+      return;
+    }
+    on_device_fault(Error(Errc::device_alarm, e.what()));
+    return;
+  }
+
+  // β and its uncertainty on the plan's grid; a reference not above dark is a device fault.
+  std::optional<ReducedPoint> reduced;
+  try {
+    reduced = reduce_point(PointSignals{.sample = sample.spectrum,
+                                        .dark = dark.spectrum,
+                                        .reference = r.reference->spectrum,
+                                        .reference_dark = r.reference_dark->spectrum},
+                           twin_.profile().reference_beta, plan.wavelengths);
+  } catch (const Error& e) {
+    if (e.code() != Errc::protocol_error && e.code() != Errc::device_alarm) throw;
+    on_device_fault(e);
+    return;
+  }
+  p.measured = std::move(reduced->beta);
+  if (read_reference) p.flags.push_back("reference_read");
+  if (sample.saturated) p.flags.push_back("saturated");
+
+  // Reference white drift against the run's first reading (instrument health).
+  if (read_reference) {
+    if (const auto drift = r.drift.observe(reduced->net_reference)) {
+      p.flags.push_back("reference_drift");
+      alerts_.raise(AlertDraft{std::string(alert_kind::reference_drift), Severity::warning,
+                               fmt::format("reference_drift:scan:{}", r.scan.id), r.scan.id,
+                               r.sample_id, p.index,
+                               fmt::format("scan {}: the reference white reading drifted {:.1f} % "
+                                           "from its first reading (limit {:.1f} %)",
+                                           r.scan.id, 100 * *drift, 100 * r.drift.limit())});
+    }
+  }
+
+  // The twin's prediction, computed ahead; waiting for it is twin time, not ours.
+  if (r.batch) {
+    beat();
+    const auto t0 = Clock::now();
+    try {
+      const auto pred = r.batch->wait(gi);
+      p.predicted = pred.spectrum();
+      p.twin_version = twin_.version();
+      if (!pred.diagnostics.converged) p.flags.push_back("prediction_unconverged");
+    } catch (const Error& e) {
+      p.flags.push_back("prediction_failed");
+      spdlog::warn("scan {} point {}: no prediction: {}", r.scan.id, idx, e.what());
+    }
+    twin_s += seconds_since(t0);
+  } else {
+    p.flags.push_back("no_prediction");
+  }
+
+  if (p.predicted) {
+    const auto d = evaluate_point(p.measured, *p.predicted, r.tolerance, r.colorimeter.get(), divergence_);
+    p.z_max = d.z_max;
+    p.delta_e00 = d.delta_e00;
+    p.diverged = d.diverged;
+  }
+  p.finished_at = utc::now();
+
+  // Commit before the next move.
+  const std::string point_text = json(p).dump();
+  try {
+    store_.insert_point(p, point_text);
+  } catch (const Error& e) {
+    if (e.code() == Errc::invalid_state) {
+      spdlog::warn("scan {}: {}; skipping it", r.scan.id, e.what());  // never store twice
+    } else {
+      on_device_fault(Error(Errc::io_error, fmt::format("cannot store point {}: {}", idx, e.what())));
+      return;
+    }
+  }
+  ++r.next;
+  ++r.since_start;
+  const double total_s = seconds_since(t_start);
+  r.busy_seconds += total_s;
+  {
+    std::lock_guard lock(mu_);
+    ++points_measured_;
+    overhead_ms_.push_back(1000.0 * std::max(0.0, total_s - device_s - twin_s));
+    if (overhead_ms_.size() > 1000) overhead_ms_.pop_front();
+  }
+
+  hub_.publish_raw(Topic::points, "scan.point", point_text, r.scan.id);
+  if (p.diverged) {
+    alerts_.raise(AlertDraft{std::string(alert_kind::divergence), Severity::warning,
+                             fmt::format("divergence:scan:{}", r.scan.id), r.scan.id, r.sample_id,
+                             p.index,
+                             fmt::format("scan {} point {} ({}): measured and predicted differ "
+                                         "(max |z| = {:.1f}{})",
+                                         r.scan.id, idx, g.to_string(), p.z_max.value_or(0),
+                                         p.delta_e00 ? fmt::format(", ΔE00 = {:.2f}", *p.delta_e00)
+                                                     : std::string())});
+  }
+  if (p.predicted && r.window.push(p.diverged) && !r.sustained_raised) {
+    r.sustained_raised = true;
+    alerts_.raise(AlertDraft{std::string(alert_kind::sustained), Severity::critical,
+                             fmt::format("sustained:scan:{}", r.scan.id), r.scan.id, r.sample_id,
+                             p.index,
+                             fmt::format("scan {}: {} of the last {} points diverge from the twin "
+                                         "(up to point {})",
+                                         r.scan.id, r.window.diverged_in_window(),
+                                         config_.sustained_n, idx)});
+    if (config_.pause_on_sustained) {
+      std::lock_guard lock(mu_);
+      control_ = Control::pause;
+      control_reason_ = "sustained divergence from the twin";
+      control_actor_ = "goniod";
+    }
+  }
+  if (p.diverged) ++r.scan.points_diverged;
+  publish_progress();
+  if (r.next >= r.scan.points_total) {
+    std::lock_guard sched(sched_mu_);
+    finish_run(ScanState::completed, "", "goniod");
+  }
+}
+
+void Instrument::publish_progress() {
+  const Run& r = *run_;
+  const auto remaining = r.scan.points_total - std::min(r.scan.points_total, r.next);
+  const double per_point = r.since_start ? r.busy_seconds / static_cast<double>(r.since_start) : 0;
+  hub_.publish(Topic::progress, "scan.progress",
+               json{{"scan", r.scan.id},
+                    {"state", "running"},
+                    {"reason", ""},
+                    {"points_done", r.next},
+                    {"points_total", r.scan.points_total},
+                    {"points_diverged", r.scan.points_diverged},
+                    {"eta_s", per_point * static_cast<double>(remaining)}},
+               r.scan.id);
+}
+
+}  // namespace gonio::daemon

@@ -1,0 +1,34 @@
+// Instrument::Run — the state of the scan being measured, shared by the files that implement
+// Instrument (instrument.cpp, instrument_run.cpp, instrument_commands.cpp). Owned by the
+// runner thread; the pointer to it is guarded by Instrument::mu_.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "gonio/daemon/divergence.hpp"
+#include "gonio/daemon/instrument.hpp"
+#include "gonio/daemon/point_reduction.hpp"
+#include "gonio/drivers/photometer.hpp"
+
+namespace gonio::daemon {
+
+struct Instrument::Run {
+  Scan scan;
+  double tolerance = 0;
+  std::optional<std::int64_t> sample_id;
+  std::shared_ptr<TwinService::Batch> batch;
+  std::shared_ptr<const twin::Colorimeter> colorimeter;
+  std::string prediction_note;  // why there are no predictions
+  std::size_t next = 0;         // next point index to measure
+  std::size_t since_start = 0;  // points measured in this run
+  std::optional<drivers::Reading> reference, reference_dark;
+  ReferenceDriftMonitor drift{DivergenceSettings{}.reference_drift};
+  SustainedWindow window{3, 5};
+  double busy_seconds = 0;  // wall time of the points of this run (for the ETA)
+  bool sustained_raised = false;
+};
+
+}  // namespace gonio::daemon
