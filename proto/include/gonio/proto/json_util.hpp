@@ -3,6 +3,7 @@
 //   json_util::ObjectReader r(j, "sample");
 //   auto name = r.required<std::string>("name");
 //   auto tol  = r.optional<double>("tolerance", 0.02);
+//   auto n    = r.optional_in<int>("repeats", 1, 1, 1000);   // bounded, inclusive
 //   r.finish();   // throws if j has keys nobody asked for
 //
 // Errors are gonio::Error(invalid_argument) whose field is "<context>.<key>".
@@ -11,6 +12,7 @@
 #include <set>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 
 #include <nlohmann/json.hpp>
@@ -72,6 +74,17 @@ class ObjectReader {
     return get_as<T>(*it, path(key));
   }
 
+  // A number within [lo, hi] (NaN is outside every range): the one reader for bounded
+  // config values, so that every bound is reported the same way (Error::out_of_range).
+  template <typename T>
+  T optional_in(const std::string& key, T fallback, T lo, T hi, std::string_view unit = {}) {
+    return checked(key, optional<T>(key, fallback), lo, hi, unit);
+  }
+  template <typename T>
+  T required_in(const std::string& key, T lo, T hi, std::string_view unit = {}) {
+    return checked(key, required<T>(key), lo, hi, unit);
+  }
+
   // Marks a key as consumed without reading it (the caller handles it itself).
   const nlohmann::json* raw(const std::string& key);
 
@@ -83,6 +96,15 @@ class ObjectReader {
   }
 
  private:
+  template <typename T>
+  T checked(const std::string& key, T v, T lo, T hi, std::string_view unit) const {
+    static_assert(std::is_arithmetic_v<T>);
+    if (!(v >= lo && v <= hi))
+      throw Error::out_of_range(path(key), static_cast<double>(v), static_cast<double>(lo),
+                                static_cast<double>(hi), unit);
+    return v;
+  }
+
   const nlohmann::json& j_;
   std::string context_;
   std::set<std::string> used_;
