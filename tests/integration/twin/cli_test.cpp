@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "gonio/proto/version.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -64,6 +66,12 @@ TEST(GonioTwinCli, PredictJsonHasEveryDocumentedField) {
     EXPECT_TRUE(p["diagnostics"].contains("seen_fraction"));
   }
   EXPECT_DOUBLE_EQ(j[0]["geometry"]["theta_r"].get<double>(), -30);
+}
+
+TEST(GonioTwinCli, VersionIsTheProjectVersion) {
+  const auto r = gonio_twin("--version");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out, "gonio-twin " + std::string(gonio::proto::kVersion) + "\n");
 }
 
 TEST(GonioTwinCli, SameSeedSameAnswer) {
