@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gonio/proto/version.hpp"
+#include "gonio/test/temp_dir.hpp"
 
 namespace {
 
@@ -38,17 +39,7 @@ Run gonio_twin(const std::string& args) {
   return r;
 }
 
-class TempDir {
- public:
-  TempDir() : path_(fs::temp_directory_path() / ("gonio-twin-test-" + std::to_string(::getpid()))) {
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using TempDir = gonio::test::TempDir;
 
 TEST(GonioTwinCli, PredictJsonHasEveryDocumentedField) {
   const auto r = gonio_twin(

@@ -1,5 +1,5 @@
 // Statistical helpers for the BSDF tests: a deterministic RNG, direction helpers, the
-// regularised incomplete gamma function (for chi-square p-values) and a chi-square
+// chi-square tail (shared test support, for p-values) and a chi-square
 // goodness-of-fit test of a sampler against its density on a 2-D parametrisation of the
 // sphere (bins with small expected counts are pooled, as in pbrt's and Mitsuba's tests).
 #pragma once
@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "gonio/test/chi_square.hpp"
 #include "gonio/twin/bsdf.hpp"
 
 namespace gonio::twin::test {
@@ -42,39 +43,8 @@ inline Vec3 dir_deg(double theta_deg, double phi_deg = 0) {
   return spherical(theta_deg * kDegToRad, phi_deg * kDegToRad);
 }
 
-// Regularised lower incomplete gamma P(a, x): series for x < a + 1, continued fraction
-// (modified Lentz) otherwise.
-inline double gamma_p(double a, double x) {
-  if (x <= 0) return 0;
-  const double log_front = a * std::log(x) - x - std::lgamma(a);
-  if (x < a + 1) {
-    double term = 1.0 / a, sum = term;
-    for (int n = 1; n < 10000; ++n) {
-      term *= x / (a + n);
-      sum += term;
-      if (std::abs(term) < std::abs(sum) * 1e-16) break;
-    }
-    return std::min(1.0, sum * std::exp(log_front));
-  }
-  constexpr double tiny = 1e-300;
-  double b = x + 1 - a, c = 1 / tiny, d = 1 / b, h = d;
-  for (int i = 1; i < 10000; ++i) {
-    const double an = -i * (i - a);
-    b += 2;
-    d = an * d + b;
-    if (std::abs(d) < tiny) d = tiny;
-    c = b + an / c;
-    if (std::abs(c) < tiny) c = tiny;
-    d = 1 / d;
-    const double delta = d * c;
-    h *= delta;
-    if (std::abs(delta - 1) < 1e-16) break;
-  }
-  return std::max(0.0, 1.0 - std::exp(log_front) * h);
-}
-
 // Probability that a chi-square variable with `dof` degrees of freedom exceeds `x`.
-inline double chi2_sf(double x, double dof) { return 1.0 - gamma_p(dof / 2, x / 2); }
+using ::gonio::test::chi2_sf;
 
 // A map of the unit square onto the sphere with its Jacobian dω/(da db), optionally
 // restricted to a domain (e.g. one hemisphere): draws outside it and the density outside
