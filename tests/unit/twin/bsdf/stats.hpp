@@ -46,6 +46,60 @@ inline Vec3 dir_deg(double theta_deg, double phi_deg = 0) {
 // Probability that a chi-square variable with `dof` degrees of freedom exceeds `x`.
 using ::gonio::test::chi2_sf;
 
+struct Estimate {
+  std::vector<double> mean, se;
+  double max_weight = 0;
+};
+
+// ∫ f |cos θi| dωi per channel by importance sampling with the model's own sampler.
+inline Estimate albedo_is(const Bsdf& b, const Vec3& wo, int n, std::uint64_t seed) {
+  const std::size_t nc = b.channels();
+  std::vector<double> s1(nc, 0), s2(nc, 0), f(nc);
+  Estimate e;
+  Rng rng(seed);
+  for (int i = 0; i < n; ++i) {
+    const double ul = rng.uniform();
+    const auto s = b.sample_wi(wo, ul, rng.uniform2());
+    if (!s) continue;
+    b.eval(s->wi, wo, f);
+    for (std::size_t c = 0; c < nc; ++c) {
+      const double w = f[c] * std::abs(s->wi.z) / s->pdf;
+      e.max_weight = std::max(e.max_weight, w);
+      s1[c] += w;
+      s2[c] += w * w;
+    }
+  }
+  for (std::size_t c = 0; c < nc; ++c) {
+    const double m = s1[c] / n;
+    e.mean.push_back(m);
+    e.se.push_back(std::sqrt(std::max(0.0, s2[c] / n - m * m) / (n - 1)));
+  }
+  return e;
+}
+
+// The same with directions drawn uniformly on the sphere: independent of sample_wi/pdf.
+inline Estimate albedo_uniform(const Bsdf& b, const Vec3& wo, int n, std::uint64_t seed) {
+  const std::size_t nc = b.channels();
+  std::vector<double> s1(nc, 0), s2(nc, 0), f(nc);
+  Rng rng(seed);
+  for (int i = 0; i < n; ++i) {
+    const Vec3 wi = rng.sphere();
+    b.eval(wi, wo, f);
+    for (std::size_t c = 0; c < nc; ++c) {
+      const double w = f[c] * std::abs(wi.z) * 4 * kPi;
+      s1[c] += w;
+      s2[c] += w * w;
+    }
+  }
+  Estimate e;
+  for (std::size_t c = 0; c < nc; ++c) {
+    const double m = s1[c] / n;
+    e.mean.push_back(m);
+    e.se.push_back(std::sqrt(std::max(0.0, s2[c] / n - m * m) / (n - 1)));
+  }
+  return e;
+}
+
 // A map of the unit square onto the sphere with its Jacobian dω/(da db), optionally
 // restricted to a domain (e.g. one hemisphere): draws outside it and the density outside
 // it are compared as one lump.
