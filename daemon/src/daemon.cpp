@@ -32,9 +32,7 @@
 #include "gonio/daemon/store.hpp"
 #include "gonio/daemon/twin_service.hpp"
 
-#ifndef GONIO_VERSION
-#define GONIO_VERSION "0.0.0"
-#endif
+#include "gonio/proto/version.hpp"
 
 namespace gonio::daemon {
 namespace {
@@ -187,7 +185,7 @@ int run_daemon(const DaemonOptions& o) {
       for (auto& l : listeners) l->close();
       return exit_code::usage;
     }
-    store->audit("goniod", "daemon.start", "", json{{"version", GONIO_VERSION}, {"listen", endpoints}});
+    store->audit("goniod", "daemon.start", "", json{{"version", GONIO_VERSION_STRING}, {"listen", endpoints}});
 
     // ---- signals, systemd
     std::thread stopper;
@@ -227,7 +225,7 @@ int run_daemon(const DaemonOptions& o) {
     }
     sd_notifyf(0, "READY=1\nSTATUS=ready, listening on %zu endpoint(s)\nMAINPID=%d", listeners.size(),
                static_cast<int>(::getpid()));
-    spdlog::info("goniod {} ready (state dir {})", GONIO_VERSION, state.string());
+    spdlog::info("goniod {} ready (state dir {})", GONIO_VERSION_STRING, state.string());
 
     std::vector<std::thread> io_threads;
     for (int i = 1; i < config.io_threads; ++i) io_threads.emplace_back([&io] { io.run(); });

@@ -18,9 +18,7 @@
 
 #include "gonio/daemon/net.hpp"
 
-#ifndef GONIO_VERSION
-#define GONIO_VERSION "0.0.0"
-#endif
+#include "gonio/proto/version.hpp"
 
 namespace gonio::daemon::net {
 
@@ -123,7 +121,7 @@ class Webhook final : public AlertSink, public std::enable_shared_from_this<Webh
     req_.target(url_.target);
     req_.version(11);
     req_.set(http::field::host, url_.host + ":" + url_.port);
-    req_.set(http::field::user_agent, "goniod/" GONIO_VERSION);
+    req_.set(http::field::user_agent, "goniod/" GONIO_VERSION_STRING);
     req_.set(http::field::content_type, "application/json");
     req_.keep_alive(false);
     req_.body() = queue_.front();

@@ -10,9 +10,7 @@
 #include "gonio/proto/text.hpp"
 #include "gonio/twin/bsdf.hpp"
 
-#ifndef GONIO_VERSION
-#define GONIO_VERSION "0.0.0"
-#endif
+#include "gonio/proto/version.hpp"
 
 namespace gonio::daemon {
 
@@ -23,7 +21,7 @@ TwinService::TwinService(const Config& config, twin::InstrumentProfile profile)
   options_.replicates = config.twin_replicates;
   options_.seed = config.twin_seed;
   options_.validate();
-  version_ = fmt::format("gonio-twin {} rqmc rel_se={} R={} seed={} profile={}", GONIO_VERSION,
+  version_ = fmt::format("gonio-twin {} rqmc rel_se={} R={} seed={} profile={}", GONIO_VERSION_STRING,
                          text::format_number(options_.rel_se), options_.replicates, options_.seed,
                          profile_.name);
   unsigned n = config.twin_threads ? config.twin_threads : std::thread::hardware_concurrency();

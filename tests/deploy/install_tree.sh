@@ -74,7 +74,7 @@ for page in daemon/man/goniod.8 daemon/man/gonioctl.1 twin/man/gonio-twin.1 driv
 done
 
 # The installed programs run from the tree (no build-tree RPATH or missing library).
-for exe in goniod gonioctl; do
+for exe in goniod gonioctl gonio-twin gonio-probe; do
   got=$("$r$bindir/$exe" --version 2>&1) || fail "$exe --version failed: $got"
   [[ $got == "$exe $version" ]] || fail "$exe --version printed '$got', expected '$exe $version'"
 done

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include "gonio/daemon/daemon.hpp"
+#include "gonio/proto/version.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"goniod — goniometric spectrophotometer service with a digital twin"};
@@ -17,7 +18,7 @@ int main(int argc, char** argv) {
   app.add_flag("--mock", o.mock, "use the built-in twin-backed mock instrument");
   app.add_option("--log-level", o.log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
-  app.set_version_flag("--version", "goniod " GONIO_VERSION);
+  app.set_version_flag("--version", "goniod " GONIO_VERSION_STRING);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

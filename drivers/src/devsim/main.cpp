@@ -18,6 +18,7 @@
 #include "gonio/drivers/mock.hpp"
 #include "gonio/drivers/scpi_sim.hpp"
 #include "gonio/proto/error.hpp"
+#include "gonio/proto/version.hpp"
 #include "gonio/twin/twin.hpp"
 
 namespace {
@@ -55,6 +56,7 @@ int main(int argc, char** argv) {
   app.add_option("--profile", profile, "instrument profile preset or JSON file");
   app.add_option("--host", host, "address the TCP servers bind (IPv4)");
   app.add_flag("-v,--verbose", verbose, "log every request");
+  app.set_version_flag("--version", "gonio-devsim " GONIO_VERSION_STRING);
   CLI11_PARSE(app, argc, argv);
   if (verbose) spdlog::set_level(spdlog::level::debug);
   if (modbus_tcp < 0 && !modbus_rtu && scpi_tcp < 0 && !scpi_pty) {

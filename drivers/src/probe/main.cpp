@@ -12,12 +12,14 @@
 #include <spdlog/spdlog.h>
 
 #include "gonio/drivers/probe/modbus_probe.hpp"
+#include "gonio/proto/version.hpp"
 #include "scpi_probe.hpp"
 
 int main(int argc, char** argv) {
   using namespace gonio::drivers::probe;
   CLI::App app{"gonio-probe: find and check goniometer devices without the daemon"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", "gonio-probe " GONIO_VERSION_STRING);
   app.footer(
       "Exit codes: 0 ok; 1 internal failure, or an interrupted move; 2 usage (nothing was sent);\n"
       "3 device absent or unreachable; 4 timeout; 5 protocol error (the device answered nonsense);\n"

@@ -9,6 +9,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "gonio/proto/version.hpp"
+#include "gonio/test/temp_dir.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -36,17 +39,7 @@ Run gonio_twin(const std::string& args) {
   return r;
 }
 
-class TempDir {
- public:
-  TempDir() : path_(fs::temp_directory_path() / ("gonio-twin-test-" + std::to_string(::getpid()))) {
-    fs::create_directories(path_);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using TempDir = gonio::test::TempDir;
 
 TEST(GonioTwinCli, PredictJsonHasEveryDocumentedField) {
   const auto r = gonio_twin(
@@ -64,6 +57,12 @@ TEST(GonioTwinCli, PredictJsonHasEveryDocumentedField) {
     EXPECT_TRUE(p["diagnostics"].contains("seen_fraction"));
   }
   EXPECT_DOUBLE_EQ(j[0]["geometry"]["theta_r"].get<double>(), -30);
+}
+
+TEST(GonioTwinCli, VersionIsTheProjectVersion) {
+  const auto r = gonio_twin("--version");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out, "gonio-twin " + std::string(gonio::proto::kVersion) + "\n");
 }
 
 TEST(GonioTwinCli, SameSeedSameAnswer) {

@@ -2,11 +2,11 @@
 // `lambert:albedo=0.5+coat:alpha=0.05,ior=1.5`: a GGX microfacet BRDF (Walter et al. 2007
 // eq. 20, height-correlated Smith G2) with the dielectric Fresnel reflectance of `ior`.
 // Reflection only (what the coat transmits is left to the other lobes: a sum does not
-// attenuate them). Two-sided; sampled through the visible normals of wo.
+// attenuate them). Two-sided; sampled through the visible normals of wo (the reflection
+// lobe it shares with `conductor`, microfacet.hpp).
 #include "bsdf/fresnel.hpp"
 #include "bsdf/microfacet.hpp"
 #include "bsdf/model.hpp"
-#include "bsdf/sampling.hpp"
 
 namespace gonio::twin::bsdf {
 namespace {
@@ -18,32 +18,17 @@ class Coat final : public Lobe {
 
   void eval(const Vec3& wi_in, const Vec3& wo_in, std::span<double> out) const override {
     double f = 0;
-    if (same_hemisphere(wi_in, wo_in)) {
-      const Vec3 wi = wo_in.z < 0 ? flip_z(wi_in) : wi_in;
-      const Vec3 wo = wo_in.z < 0 ? flip_z(wo_in) : wo_in;
-      const Vec3 h = normalize(wi + wo);
-      f = fresnel_dielectric(dot(wi, h), ior_) * mf_.D(h) * mf_.G2(wi, wo) / (4.0 * wi.z * wo.z);
-    }
+    if (const auto fr = reflection_frame(wi_in, wo_in))
+      f = fresnel_dielectric(dot(fr->wi, fr->h), ior_) * mf_.D(fr->h) * mf_.G2(fr->wi, fr->wo) /
+          (4.0 * fr->wi.z * fr->wo.z);
     for (auto& v : out) v = f;
   }
 
-  std::optional<BsdfSample> sample_wi(const Vec3& wo_in, double, Vec2 u) const override {
-    if (wo_in.z == 0) return std::nullopt;
-    const Vec3 wo = wo_in.z < 0 ? flip_z(wo_in) : wo_in;
-    Vec3 wi = reflect(wo, mf_.sample_visible(wo, u));
-    if (wi.z <= 0) return std::nullopt;
-    if (wo_in.z < 0) wi = flip_z(wi);
-    const double p = pdf(wo_in, wi);
-    if (!(p > 0)) return std::nullopt;
-    return BsdfSample{wi, p};
+  std::optional<BsdfSample> sample_wi(const Vec3& wo, double, Vec2 u) const override {
+    return sample_reflection(mf_, wo, u);
   }
 
-  double pdf(const Vec3& wo_in, const Vec3& wi_in) const override {
-    if (!same_hemisphere(wi_in, wo_in)) return 0.0;
-    const Vec3 wi = wo_in.z < 0 ? flip_z(wi_in) : wi_in;
-    const Vec3 wo = wo_in.z < 0 ? flip_z(wo_in) : wo_in;
-    return mf_.G1(wo) * mf_.D(normalize(wi + wo)) / (4.0 * wo.z);
-  }
+  double pdf(const Vec3& wo, const Vec3& wi) const override { return reflection_pdf(mf_, wo, wi); }
 
   double albedo_hint(const Vec3& wo) const override {
     return fresnel_dielectric(abs_cos_theta(wo), ior_);

@@ -9,7 +9,6 @@
 #include "bsdf/conductor.hpp"
 
 #include "bsdf/fresnel.hpp"
-#include "bsdf/sampling.hpp"
 
 namespace gonio::twin::bsdf {
 namespace {
@@ -24,13 +23,11 @@ class RoughConductor final : public Lobe {
 
   void eval(const Vec3& wi_in, const Vec3& wo_in, std::span<double> out) const override {
     for (auto& v : out) v = 0.0;
-    if (!same_hemisphere(wi_in, wo_in)) return;
-    const Vec3 wi = wo_in.z < 0 ? flip_z(wi_in) : wi_in;
-    const Vec3 wo = wo_in.z < 0 ? flip_z(wo_in) : wo_in;
-    const Vec3 h = normalize(wi + wo);
-    const double common = mf_.D(h) * mf_.G2(wi, wo) / (4.0 * wi.z * wo.z);
+    const auto fr = reflection_frame(wi_in, wo_in);
+    if (!fr) return;
+    const double common = mf_.D(fr->h) * mf_.G2(fr->wi, fr->wo) / (4.0 * fr->wi.z * fr->wo.z);
     if (!(common > 0)) return;
-    const double cos_h = dot(wi, h);
+    const double cos_h = dot(fr->wi, fr->h);
     // Spectrally flat stretches of η and k (common in specs) reuse the previous channel.
     for (std::size_t c = 0; c < out.size(); ++c)
       out[c] = c > 0 && eta_[c] == eta_[c - 1] && k_[c] == k_[c - 1]
@@ -38,25 +35,11 @@ class RoughConductor final : public Lobe {
                    : common * fresnel_conductor(cos_h, eta_[c], k_[c]);
   }
 
-  std::optional<BsdfSample> sample_wi(const Vec3& wo_in, double, Vec2 u) const override {
-    if (wo_in.z == 0) return std::nullopt;
-    const Vec3 wo = wo_in.z < 0 ? flip_z(wo_in) : wo_in;
-    const Vec3 m = mf_.sample_visible(wo, u);
-    Vec3 wi = reflect(wo, m);
-    if (wi.z <= 0) return std::nullopt;
-    if (wo_in.z < 0) wi = flip_z(wi);
-    const double p = pdf(wo_in, wi);
-    if (!(p > 0)) return std::nullopt;
-    return BsdfSample{wi, p};
+  std::optional<BsdfSample> sample_wi(const Vec3& wo, double, Vec2 u) const override {
+    return sample_reflection(mf_, wo, u);
   }
 
-  double pdf(const Vec3& wo_in, const Vec3& wi_in) const override {
-    if (!same_hemisphere(wi_in, wo_in)) return 0.0;
-    const Vec3 wi = wo_in.z < 0 ? flip_z(wi_in) : wi_in;
-    const Vec3 wo = wo_in.z < 0 ? flip_z(wo_in) : wo_in;
-    const Vec3 h = normalize(wi + wo);
-    return mf_.G1(wo) * mf_.D(h) / (4.0 * wo.z);
-  }
+  double pdf(const Vec3& wo, const Vec3& wi) const override { return reflection_pdf(mf_, wo, wi); }
 
   double albedo_hint(const Vec3& wo) const override {
     double s = 0;

@@ -6,6 +6,7 @@
 // direction; Beckmann by Heitz & d'Eon 2014 ("Importance Sampling Microfacet-Based BSDFs
 // using the Distribution of Visible Normals", §4 and appendix), which inverts the CDF of
 // the visible slope along the incident azimuth and draws the other slope from a Gaussian.
+// Then the two-sided reflection lobe built on them (microfacet.hpp).
 #include "bsdf/microfacet.hpp"
 
 #include <algorithm>
@@ -74,6 +75,30 @@ Vec3 sample_beckmann_visible(const Vec3& w, double alpha, Vec2 u) noexcept {
 Vec3 Microfacet::sample_visible(const Vec3& w, Vec2 u) const noexcept {
   return kind == Distribution::ggx ? sample_ggx_visible(w, alpha, u)
                                    : sample_beckmann_visible(w, alpha, u);
+}
+
+std::optional<ReflectionFrame> reflection_frame(const Vec3& wi_in, const Vec3& wo_in) noexcept {
+  if (!same_hemisphere(wi_in, wo_in)) return std::nullopt;
+  const Vec3 wi = wo_in.z < 0 ? flip_z(wi_in) : wi_in;
+  const Vec3 wo = wo_in.z < 0 ? flip_z(wo_in) : wo_in;
+  return ReflectionFrame{wi, wo, normalize(wi + wo)};
+}
+
+double reflection_pdf(const Microfacet& mf, const Vec3& wo, const Vec3& wi) noexcept {
+  const auto f = reflection_frame(wi, wo);
+  if (!f) return 0.0;
+  return mf.G1(f->wo) * mf.D(f->h) / (4.0 * f->wo.z);
+}
+
+std::optional<BsdfSample> sample_reflection(const Microfacet& mf, const Vec3& wo_in, Vec2 u) noexcept {
+  if (wo_in.z == 0) return std::nullopt;
+  const Vec3 wo = wo_in.z < 0 ? flip_z(wo_in) : wo_in;
+  Vec3 wi = reflect(wo, mf.sample_visible(wo, u));
+  if (wi.z <= 0) return std::nullopt;
+  if (wo_in.z < 0) wi = flip_z(wi);
+  const double p = reflection_pdf(mf, wo_in, wi);
+  if (!(p > 0)) return std::nullopt;
+  return BsdfSample{wi, p};
 }
 
 }  // namespace gonio::twin::bsdf

@@ -6,11 +6,18 @@
 // D_w(m) = G1(w) max(0, w·m) D(m) / cos θw (Heitz 2014, "Understanding the Masking-
 // Shadowing Function in Microfacet-Based BRDFs", JCGT 3(2), eqs. 2, 38, 99). Visible-normal
 // sampling keeps narrow lobes (α down to 0.001) and grazing directions well sampled.
+//
+// Also the two-sided reflection lobe that `conductor`, `beckmann` and `coat` share: the
+// frame (wi, wo mirrored to wo's side, their half vector), sampling wi by reflecting wo
+// about a visible normal, and that sampler's density G1(wo) D(h) / (4 cos θo) (Heitz 2018
+// §2). Each model multiplies D G2 / (4 cos θi cos θo) by its own Fresnel term.
 #pragma once
 
 #include <cmath>
 #include <limits>
+#include <optional>
 
+#include "gonio/twin/bsdf.hpp"
 #include "gonio/twin/vec.hpp"
 
 namespace gonio::twin::bsdf {
@@ -72,5 +79,22 @@ struct Microfacet {
   // Draws m from D_w(m) for w.z > 0, u ∈ [0,1)².
   Vec3 sample_visible(const Vec3& w, Vec2 u) const noexcept;
 };
+
+// wi and wo of a two-sided reflection lobe mirrored into wo's hemisphere (so wo.z > 0 and
+// wi.z > 0), with the half vector h = (wi + wo)/|wi + wo|.
+struct ReflectionFrame {
+  Vec3 wi, wo, h;
+};
+
+// The frame of (wi, wo); none when they are not strictly on the same side of the surface.
+std::optional<ReflectionFrame> reflection_frame(const Vec3& wi, const Vec3& wo) noexcept;
+
+// Density of sample_reflection: G1(wo) D(h) / (4 |cos θo|) when wi and wo are on the same
+// side, else 0.
+double reflection_pdf(const Microfacet& mf, const Vec3& wo, const Vec3& wi) noexcept;
+
+// wi from reflecting wo about a visible normal of wo, on wo's side of the surface, with
+// its density; none for grazing wo, a reflection below the surface or a zero density.
+std::optional<BsdfSample> sample_reflection(const Microfacet& mf, const Vec3& wo, Vec2 u) noexcept;
 
 }  // namespace gonio::twin::bsdf

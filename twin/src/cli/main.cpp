@@ -3,13 +3,14 @@
 
 #include "cli/common.hpp"
 #include "cli/output.hpp"
+#include "gonio/proto/version.hpp"
 
 int main(int argc, char** argv) {
   using namespace gonio::twin::cli;
   CLI::App app{"gonio-twin — virtual measurements with a physically based model of the "
                "goniometric spectrophotometer"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "gonio-twin 0.1.0");
+  app.set_version_flag("--version", "gonio-twin " GONIO_VERSION_STRING);
   add_predict(app);
   add_error_map(app);
   add_plan(app);

@@ -29,11 +29,9 @@
 
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/color.hpp"
+#include "plot/cairo_util.hpp"
 
 namespace gonio::twin {
-namespace detail {
-void release_font_caches_at_exit();  // plot.cpp: frees font caches in sanitizer builds
-}  // namespace detail
 namespace {
 
 // SplitMix64 (Steele, Lea & Flood, "Fast splittable pseudorandom number generators",
@@ -106,8 +104,8 @@ struct Side {
 };
 
 void draw_captions(Image& img, int size, int band, const RenderOptions& o) {
-  using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
-  using ContextPtr = std::unique_ptr<cairo_t, decltype(&cairo_destroy)>;
+  using plot::ContextPtr;
+  using plot::SurfacePtr;
   SurfacePtr s(cairo_image_surface_create(CAIRO_FORMAT_RGB24, img.width, band),
                cairo_surface_destroy);
   if (cairo_surface_status(s.get()) != CAIRO_STATUS_SUCCESS)

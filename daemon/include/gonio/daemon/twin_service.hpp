@@ -36,7 +36,7 @@ class TwinService {
   const twin::InstrumentProfile& profile() const noexcept { return profile_; }
   const twin::EstimatorOptions& options() const noexcept { return options_; }
   unsigned threads() const noexcept { return static_cast<unsigned>(workers_.size()); }
-  // "gonio-twin 0.1.0 rqmc rel_se=0.002 R=16 seed=1 profile=gcms4"
+  // "gonio-twin <version> rqmc rel_se=0.002 R=16 seed=1 profile=gcms4"
   const std::string& version() const noexcept { return version_; }
 
   // A twin for a BSDF spec on `grid`; throws Error naming `field` (e.g. "bsdf").

@@ -1,7 +1,8 @@
 // The microfacet building blocks on their own: normalisation of D, the weak white furnace
 // (Heitz 2014 §3.3: ∫ D(h) G1(wo) / (4 |cos θo|) dωi = 1 over the whole sphere of
 // wi = reflect(wo, h), i.e. Fresnel = 1 and nothing lost to a second bounce counted),
-// visible-normal sampling against its density, and the Fresnel formulas' known values.
+// visible-normal sampling against its density, the shared reflection lobe, and the Fresnel
+// formulas' known values.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -120,6 +121,40 @@ TEST(Microfacet, SmithLambdaLimits) {
     EXPECT_EQ(mf.G1({1, 0, 0}), 0.0);  // grazing: fully masked
     EXPECT_LT(mf.G1(dir_deg(80)), mf.G1(dir_deg(40)));
     EXPECT_NEAR(mf.G2(dir_deg(0), dir_deg(0)), 1.0, 1e-15);
+  }
+}
+
+// The reflection lobe conductor and coat share: two-sided, its samples carry the density
+// reflection_pdf gives, and wi and wo on opposite sides have neither frame nor density.
+TEST(MicrofacetReflection, SamplesCarryTheirDensityOnBothSides) {
+  test::Rng rng(11);
+  for (auto d : {Distribution::ggx, Distribution::beckmann}) {
+    const Microfacet mf{d, 0.2};
+    int drawn = 0;
+    for (int i = 0; i < 500; ++i) {
+      const Vec3 wo = dir_deg(i % 2 ? 160 : 35, 360 * rng.uniform());
+      const auto s = bsdf::sample_reflection(mf, wo, rng.uniform2());
+      if (!s) continue;
+      ++drawn;
+      EXPECT_GT(s->wi.z * wo.z, 0.0) << "reflection leaves wo's side";
+      EXPECT_DOUBLE_EQ(s->pdf, bsdf::reflection_pdf(mf, wo, s->wi));
+      // Mirroring both directions through the surface changes nothing.
+      EXPECT_DOUBLE_EQ(bsdf::reflection_pdf(mf, bsdf::flip_z(wo), bsdf::flip_z(s->wi)), s->pdf);
+      const auto fr = bsdf::reflection_frame(s->wi, wo);
+      ASSERT_TRUE(fr);
+      EXPECT_GT(fr->wo.z, 0.0);
+      EXPECT_GT(fr->wi.z, 0.0);
+      EXPECT_NEAR(length(fr->h), 1.0, 1e-12);
+    }
+    EXPECT_GT(drawn, 450);
+    const Vec3 wo = dir_deg(30, 0);
+    const Vec3 through = dir_deg(150, 180);
+    EXPECT_FALSE(bsdf::reflection_frame(through, wo));
+    EXPECT_EQ(bsdf::reflection_pdf(mf, wo, through), 0.0);
+    EXPECT_FALSE(bsdf::sample_reflection(mf, Vec3{1, 0, 0}, {0.5, 0.5}));  // grazing wo
+    // At the mirror direction the density is G1(wo) D(n) / (4 cos θo).
+    EXPECT_NEAR(bsdf::reflection_pdf(mf, wo, reflect(wo, {0, 0, 1})),
+                mf.G1(wo) * mf.D({0, 0, 1}) / (4 * wo.z), 1e-9);
   }
 }
 

@@ -1,5 +1,5 @@
 // Statistical helpers for the BSDF tests: a deterministic RNG, direction helpers, the
-// regularised incomplete gamma function (for chi-square p-values) and a chi-square
+// chi-square tail (shared test support, for p-values) and a chi-square
 // goodness-of-fit test of a sampler against its density on a 2-D parametrisation of the
 // sphere (bins with small expected counts are pooled, as in pbrt's and Mitsuba's tests).
 #pragma once
@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "gonio/test/chi_square.hpp"
 #include "gonio/twin/bsdf.hpp"
 
 namespace gonio::twin::test {
@@ -42,39 +43,62 @@ inline Vec3 dir_deg(double theta_deg, double phi_deg = 0) {
   return spherical(theta_deg * kDegToRad, phi_deg * kDegToRad);
 }
 
-// Regularised lower incomplete gamma P(a, x): series for x < a + 1, continued fraction
-// (modified Lentz) otherwise.
-inline double gamma_p(double a, double x) {
-  if (x <= 0) return 0;
-  const double log_front = a * std::log(x) - x - std::lgamma(a);
-  if (x < a + 1) {
-    double term = 1.0 / a, sum = term;
-    for (int n = 1; n < 10000; ++n) {
-      term *= x / (a + n);
-      sum += term;
-      if (std::abs(term) < std::abs(sum) * 1e-16) break;
+// Probability that a chi-square variable with `dof` degrees of freedom exceeds `x`.
+using ::gonio::test::chi2_sf;
+
+struct Estimate {
+  std::vector<double> mean, se;
+  double max_weight = 0;
+};
+
+// ∫ f |cos θi| dωi per channel by importance sampling with the model's own sampler.
+inline Estimate albedo_is(const Bsdf& b, const Vec3& wo, int n, std::uint64_t seed) {
+  const std::size_t nc = b.channels();
+  std::vector<double> s1(nc, 0), s2(nc, 0), f(nc);
+  Estimate e;
+  Rng rng(seed);
+  for (int i = 0; i < n; ++i) {
+    const double ul = rng.uniform();
+    const auto s = b.sample_wi(wo, ul, rng.uniform2());
+    if (!s) continue;
+    b.eval(s->wi, wo, f);
+    for (std::size_t c = 0; c < nc; ++c) {
+      const double w = f[c] * std::abs(s->wi.z) / s->pdf;
+      e.max_weight = std::max(e.max_weight, w);
+      s1[c] += w;
+      s2[c] += w * w;
     }
-    return std::min(1.0, sum * std::exp(log_front));
   }
-  constexpr double tiny = 1e-300;
-  double b = x + 1 - a, c = 1 / tiny, d = 1 / b, h = d;
-  for (int i = 1; i < 10000; ++i) {
-    const double an = -i * (i - a);
-    b += 2;
-    d = an * d + b;
-    if (std::abs(d) < tiny) d = tiny;
-    c = b + an / c;
-    if (std::abs(c) < tiny) c = tiny;
-    d = 1 / d;
-    const double delta = d * c;
-    h *= delta;
-    if (std::abs(delta - 1) < 1e-16) break;
+  for (std::size_t c = 0; c < nc; ++c) {
+    const double m = s1[c] / n;
+    e.mean.push_back(m);
+    e.se.push_back(std::sqrt(std::max(0.0, s2[c] / n - m * m) / (n - 1)));
   }
-  return std::max(0.0, 1.0 - std::exp(log_front) * h);
+  return e;
 }
 
-// Probability that a chi-square variable with `dof` degrees of freedom exceeds `x`.
-inline double chi2_sf(double x, double dof) { return 1.0 - gamma_p(dof / 2, x / 2); }
+// The same with directions drawn uniformly on the sphere: independent of sample_wi/pdf.
+inline Estimate albedo_uniform(const Bsdf& b, const Vec3& wo, int n, std::uint64_t seed) {
+  const std::size_t nc = b.channels();
+  std::vector<double> s1(nc, 0), s2(nc, 0), f(nc);
+  Rng rng(seed);
+  for (int i = 0; i < n; ++i) {
+    const Vec3 wi = rng.sphere();
+    b.eval(wi, wo, f);
+    for (std::size_t c = 0; c < nc; ++c) {
+      const double w = f[c] * std::abs(wi.z) * 4 * kPi;
+      s1[c] += w;
+      s2[c] += w * w;
+    }
+  }
+  Estimate e;
+  for (std::size_t c = 0; c < nc; ++c) {
+    const double m = s1[c] / n;
+    e.mean.push_back(m);
+    e.se.push_back(std::sqrt(std::max(0.0, s2[c] / n - m * m) / (n - 1)));
+  }
+  return e;
+}
 
 // A map of the unit square onto the sphere with its Jacobian dω/(da db), optionally
 // restricted to a domain (e.g. one hemisphere): draws outside it and the density outside

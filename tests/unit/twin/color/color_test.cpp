@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "gonio/proto/error.hpp"
+#include "gonio/test/temp_dir.hpp"
 #include "gonio/twin/color.hpp"
 
 namespace gonio::twin {
@@ -18,29 +19,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A fresh directory under the system temp dir, removed at the end of the test.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("gonio-color-" + std::to_string(::getpid()) + "-" + info->name());
-    fs::remove_all(path_);
-    fs::create_directories(path_ / "cmf");
-    fs::create_directories(path_ / "illuminant");
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-  void write(const std::string& rel, const std::string& text) const {
-    std::ofstream(path_ / rel) << text;
-  }
-
- private:
-  fs::path path_;
-};
+using TempDir = ::gonio::test::TempDir;
 
 // Sets GONIO_COLORD_DIR for the scope of a test.
 class ScopedColordDir {

@@ -12,30 +12,14 @@
 #include <unistd.h>
 
 #include "gonio/proto/error.hpp"
+#include "gonio/test/temp_dir.hpp"
 
 namespace gonio::twin {
 namespace {
 
 namespace fs = std::filesystem;
 
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("gonio-plot-" + std::to_string(::getpid()) + "-" + info->name());
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
+using TempDir = ::gonio::test::TempDir;
 
 std::string head(const std::string& path, std::size_t n) {
   std::ifstream in(path, std::ios::binary);

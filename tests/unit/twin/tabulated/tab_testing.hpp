@@ -1,6 +1,6 @@
-// Test support for the tabulated-BSDF tests: small analytic models written here (independent of
-// the model family), direction builders for every parametrization, a chi-square goodness
-// of fit test, and a scratch directory.
+// Test support for the tabulated-BSDF tests: direction builders for every parametrization,
+// tables of the shared test BSDFs (gonio/test/test_bsdfs.hpp), a chi-square goodness of fit
+// test, and a scratch directory.
 #pragma once
 
 #include <algorithm>
@@ -14,6 +14,9 @@
 #include <gtest/gtest.h>
 
 #include "gonio/proto/error.hpp"
+#include "gonio/test/chi_square.hpp"
+#include "gonio/test/temp_dir.hpp"
+#include "gonio/test/test_bsdfs.hpp"
 #include "gonio/twin/bsdf.hpp"
 #include "gonio/twin/tabulated.hpp"
 
@@ -105,114 +108,12 @@ inline std::vector<double> steps(double a, double b, double s) {
   return v;
 }
 
-// A spectral factor so that channels differ: 1 − 0.4·(λ − 400)/300.
-inline double tint(double nm) { return 1.0 - 0.4 * (nm - 400.0) / 300.0; }
-
-// Lambertian reflection (albedo a, tinted) and optionally Lambertian transmission.
-class Lambert final : public Bsdf {
- public:
-  Lambert(WavelengthGrid g, double a, double t = 0) : Bsdf(std::move(g)), a_(a), t_(t) {}
-  void eval(const Vec3& wi, const Vec3& wo, std::span<double> out) const override {
-    const double k = wi.z * wo.z > 0 ? a_ : (wi.z * wo.z < 0 ? t_ : 0.0);
-    for (std::size_t c = 0; c < out.size(); ++c) out[c] = k * kInvPi * tint(wavelengths()[c]);
-  }
-  std::optional<BsdfSample> sample_wi(const Vec3&, double, Vec2) const override { return {}; }
-  double pdf(const Vec3&, const Vec3&) const override { return 0; }
-  std::string spec() const override { return "test-lambert"; }
-
- private:
-  double a_, t_;
-};
-
-// Reciprocal Phong lobe about the mirror direction plus a diffuse floor, and an optional
-// lobe about the straight-through direction in transmission; `aniso` stretches the
-// reflection lobe along x (makes the model depend on absolute azimuth).
-class Lobes final : public Bsdf {
- public:
-  Lobes(WavelengthGrid g, double kd, double ks, double n, double kt = 0, double nt = 1,
-        double aniso = 0)
-      : Bsdf(std::move(g)), kd_(kd), ks_(ks), n_(n), kt_(kt), nt_(nt), aniso_(aniso) {}
-  double scalar(const Vec3& wi, const Vec3& wo) const {
-    if (wi.z * wo.z > 0) {
-      const Vec3 a = wi.z > 0 ? wi : Vec3{wi.x, wi.y, -wi.z};
-      const Vec3 b = wi.z > 0 ? wo : Vec3{wo.x, wo.y, -wo.z};
-      double c = std::max(0.0, dot(b, mirror(a)));
-      double v = kd_ * kInvPi + ks_ * (n_ + 2) / (2 * kPi) * std::pow(c, n_);
-      if (aniso_ > 0) {
-        const double hx = a.x + b.x;
-        v *= 1 + aniso_ * hx * hx;
-      }
-      return v;
-    }
-    if (wi.z * wo.z < 0 && kt_ > 0) {
-      const double c = std::max(0.0, dot(wo, -wi));
-      return kt_ * (nt_ + 2) / (2 * kPi) * std::pow(c, nt_);
-    }
-    return 0;
-  }
-  void eval(const Vec3& wi, const Vec3& wo, std::span<double> out) const override {
-    const double v = scalar(wi, wo);
-    for (std::size_t c = 0; c < out.size(); ++c) out[c] = v * tint(wavelengths()[c]);
-  }
-  std::optional<BsdfSample> sample_wi(const Vec3&, double, Vec2) const override { return {}; }
-  double pdf(const Vec3&, const Vec3&) const override { return 0; }
-  std::string spec() const override { return "test-lobes"; }
-
- private:
-  double kd_, ks_, n_, kt_, nt_, aniso_;
-};
-
-// An ideal mirror with reflectance r, and an ideal straight-through transmitter with t.
-class Specular final : public Bsdf {
- public:
-  Specular(WavelengthGrid g, double r, double t) : Bsdf(std::move(g)), r_(r), t_(t) {}
-  void eval(const Vec3&, const Vec3&, std::span<double> out) const override {
-    std::fill(out.begin(), out.end(), 0.0);
-  }
-  std::optional<BsdfSample> sample_wi(const Vec3&, double, Vec2) const override { return {}; }
-  double pdf(const Vec3&, const Vec3&) const override { return 0; }
-  void delta_lobes(const Vec3& wo, std::vector<DeltaLobe>& out) const override {
-    out.clear();
-    if (r_ > 0) out.push_back({mirror(wo), std::vector<double>(channels(), r_)});
-    if (t_ > 0) out.push_back({-wo, std::vector<double>(channels(), t_)});
-  }
-  bool has_delta() const noexcept override { return true; }
-  std::string spec() const override { return "test-specular"; }
-
- private:
-  double r_, t_;
-};
-
-// Regularised upper incomplete gamma Q(a, x), by its series (x < a + 1) or continued fraction
-// (Abramowitz & Stegun 6.5.29 and 6.5.31).
-inline double gamma_q(double a, double x) {
-  if (x <= 0) return 1;
-  const double lg = std::lgamma(a);
-  if (x < a + 1) {
-    double sum = 1 / a, term = sum;
-    for (int n = 1; n < 1000; ++n) {
-      term *= x / (a + n);
-      sum += term;
-      if (std::abs(term) < std::abs(sum) * 1e-15) break;
-    }
-    return 1 - sum * std::exp(-x + a * std::log(x) - lg);
-  }
-  // Lentz's evaluation of the continued fraction.
-  double b = x + 1 - a, c = 1e300, d = 1 / b, h = d;
-  for (int i = 1; i < 1000; ++i) {
-    const double an = -i * (i - a);
-    b += 2;
-    d = an * d + b;
-    if (std::abs(d) < 1e-300) d = 1e-300;
-    c = b + an / c;
-    if (std::abs(c) < 1e-300) c = 1e-300;
-    d = 1 / d;
-    const double del = d * c;
-    h *= del;
-    if (std::abs(del - 1) < 1e-15) break;
-  }
-  return std::exp(-x + a * std::log(x) - lg) * h;
-}
+// The test BSDFs and the chi-square tail come from the shared test support library.
+using ::gonio::test::tint;
+using Lambert = ::gonio::test::LambertBsdf;
+using Lobes = ::gonio::test::LobesBsdf;
+using Specular = ::gonio::test::SpecularBsdf;
+using ::gonio::test::gamma_q;
 
 // Chi-square test of `bsdf.sample_wi(wo, …)` against `bsdf.pdf(wo, ·)` over (cos θ, φ) bins
 // of the whole sphere; expected counts by midpoint integration of the pdf on a sub-grid.
@@ -288,23 +189,7 @@ inline ChiSquare chi_square(const Bsdf& bsdf, const Vec3& wo, std::size_t sample
 }
 
 // A fresh directory under the system temporary directory, removed at destruction.
-class ScratchDir {
- public:
-  ScratchDir() {
-    std::random_device rd;
-    path_ = std::filesystem::temp_directory_path() /
-            ("gonio-tabulated-" + std::to_string(rd()) + std::to_string(rd()));
-    std::filesystem::create_directories(path_);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  std::filesystem::path path_;
-};
+using ScratchDir = ::gonio::test::TempDir;
 
 // Runs f and returns the gonio::Error it throws (a test failure when it throws nothing).
 template <typename F>

@@ -1,14 +1,10 @@
-// Line plots through Cairo, and PNG image I/O.
+// Line plots through Cairo: the drawing of a Figure and its writing as PNG, SVG or PDF.
 //
 // One drawing routine serves every format: Cairo's image surface (written as PNG), its SVG
 // surface and its PDF surface. Layout is computed from text extents so that tick labels,
 // axis labels and the legend never overlap; the legend goes to the inside corner that
-// covers the fewest data points (none, ideally), otherwise outside on the right.
-// Tick positions use Heckbert's "nice numbers" (Graphics Gems, 1990): steps of 1, 2 or 5
-// times a power of ten; logarithmic axes tick at decades (with 2 and 5 when they span
-// little) and label them 10ⁿ with a raised exponent.
-#include "gonio/twin/plot.hpp"
-
+// covers the fewest data points (none, ideally), otherwise outside on the right. Scales
+// and tick positions come from scale.hpp; 8-bit images and their PNG I/O are in image.cpp.
 #include <cairo-pdf.h>
 #include <cairo-svg.h>
 #include <cairo.h>
@@ -26,6 +22,9 @@
 #include <fmt/format.h>
 
 #include "gonio/proto/error.hpp"
+#include "gonio/twin/plot.hpp"
+#include "plot/cairo_util.hpp"
+#include "plot/scale.hpp"
 
 namespace gonio::twin {
 namespace detail {
@@ -55,8 +54,15 @@ void release_font_caches_at_exit() {}
 
 namespace {
 
-using SurfacePtr = std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)>;
-using ContextPtr = std::unique_ptr<cairo_t, decltype(&cairo_destroy)>;
+using plot::check;
+using plot::ContextPtr;
+using plot::Label;
+using plot::Scale;
+using plot::SurfacePtr;
+using plot::Tick;
+using plot::axis_title;
+using plot::make_scale;
+using plot::ticks;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
@@ -93,11 +99,6 @@ void text(cairo_t* cr, const std::string& s, double x, double y, double ha) {
   cairo_show_text(cr, s.c_str());
 }
 
-// A tick label: base text with an optional raised exponent ("10" + "-3").
-struct Label {
-  std::string base, sup;
-};
-
 double label_width(cairo_t* cr, const Label& l, double size) {
   font(cr, size);
   double w = text_width(cr, l.base);
@@ -120,132 +121,6 @@ void draw_label(cairo_t* cr, const Label& l, double x, double y, double ha, doub
     text(cr, l.sup, x0 + bw, y - 0.45 * size, 0);
     font(cr, size);
   }
-}
-
-std::string axis_title(const Axis& a) {
-  return a.unit.empty() ? a.label : fmt::format("{} ({})", a.label, a.unit);
-}
-
-// ---- scales and ticks ----------------------------------------------------------------
-
-struct Scale {
-  double lo = 0, hi = 1;  // data range
-  bool log = false;
-  double p0 = 0, p1 = 1;  // device coordinates of lo and hi
-  double t(double v) const { return log ? std::log10(v) : v; }
-  double map(double v) const { return p0 + (t(v) - t(lo)) / (t(hi) - t(lo)) * (p1 - p0); }
-  bool valid(double v) const { return std::isfinite(v) && (!log || v > 0); }
-};
-
-struct Tick {
-  double v;
-  Label label;
-  bool major;
-};
-
-// Heckbert's nice number: 1, 2, 5 or 10 times a power of ten, close to x.
-double nice_step(double x) {
-  const double e = std::floor(std::log10(x));
-  const double f = x / std::pow(10.0, e);
-  const double nf = f < 1.5 ? 1 : f < 3 ? 2 : f < 7 ? 5 : 10;
-  return nf * std::pow(10.0, e);
-}
-
-std::string format_tick(double v, double step) {
-  const int decimals = std::max(0, -static_cast<int>(std::floor(std::log10(step) + 1e-9)));
-  if (std::abs(v) < step * 1e-9) v = 0;  // no "-0"
-  return fmt::format("{:.{}f}", v, decimals);
-}
-
-std::vector<Tick> ticks(const Scale& s, double length_px) {
-  std::vector<Tick> out;
-  if (!s.log) {
-    const int target = std::clamp(static_cast<int>(length_px / 70), 3, 10);
-    const double step = nice_step((s.hi - s.lo) / target);
-    for (double k = std::ceil(s.lo / step - 1e-9); k * step <= s.hi + step * 1e-9; k += 1) {
-      const double v = k * step;
-      out.push_back({v, {format_tick(v, step), ""}, true});
-    }
-    return out;
-  }
-  const double d0 = std::floor(std::log10(s.lo)), d1 = std::ceil(std::log10(s.hi));
-  const double decades = std::log10(s.hi / s.lo);
-  const int every = std::max(1, static_cast<int>(std::ceil((d1 - d0) / std::max(2.0, length_px / 45))));
-  for (double d = d0; d <= d1; d += 1) {
-    for (int m = 1; m <= 9; ++m) {
-      const double v = m * std::pow(10.0, d);
-      if (v < s.lo * (1 - 1e-9) || v > s.hi * (1 + 1e-9)) continue;
-      if (decades < 1.5) {  // few decades: plain numbers at 1, 2, 5
-        const bool labelled = m == 1 || m == 2 || m == 5;
-        const double step = std::pow(10.0, d);
-        out.push_back({v, {labelled ? format_tick(v, step) : "", ""}, labelled});
-      } else if (m == 1) {
-        const bool labelled = static_cast<long long>(d - d0) % every == 0;
-        out.push_back({v, {labelled ? "10" : "", labelled ? fmt::format("{:g}", d) : ""}, true});
-      } else if (decades <= 6) {
-        out.push_back({v, {}, false});  // unlabelled minor tick
-      }
-    }
-  }
-  return out;
-}
-
-// Data range of an axis: finite values (positive ones on a log axis), padded.
-std::pair<double, double> auto_range(const Axis& axis, const std::vector<Series>& series,
-                                     bool is_y) {
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  const auto take = [&](double v) {
-    if (!std::isfinite(v) || (axis.log && v <= 0)) return;
-    lo = std::min(lo, v);
-    hi = std::max(hi, v);
-  };
-  for (const auto& s : series) {
-    const auto& v = is_y ? s.y : s.x;
-    for (std::size_t i = 0; i < v.size(); ++i) {
-      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
-      take(v[i]);
-      if (is_y && !s.sigma.empty()) {
-        take(v[i] + s.sigma[i]);
-        if (!axis.log || v[i] - s.sigma[i] > v[i] * 0.1) take(v[i] - s.sigma[i]);
-      }
-    }
-  }
-  if (!(lo <= hi)) return axis.log ? std::pair{1.0, 10.0} : std::pair{0.0, 1.0};
-  if (axis.log) {
-    double l = std::log10(lo), h = std::log10(hi);
-    if (h - l < 1e-9) {
-      l -= 0.5;
-      h += 0.5;
-    }
-    const double pad = 0.04 * (h - l);
-    return {std::pow(10.0, l - pad), std::pow(10.0, h + pad)};
-  }
-  if (hi - lo < 1e-12 * std::max(1.0, std::abs(hi))) {
-    const double d = std::max(1.0, std::abs(hi) * 0.1);
-    return {lo - d, hi + d};
-  }
-  const double pad = 0.04 * (hi - lo);
-  return {lo - pad, hi + pad};
-}
-
-Scale make_scale(const Axis& axis, const std::vector<Series>& series, bool is_y) {
-  auto [lo, hi] = auto_range(axis, series, is_y);
-  if (axis.min) lo = *axis.min;
-  if (axis.max) hi = *axis.max;
-  if (!(hi > lo)) {  // one bound given and the data beyond it
-    if (axis.log) {
-      if (axis.min) hi = lo * 10;
-      else lo = hi / 10;
-    } else {
-      if (axis.min) hi = lo + 1;
-      else lo = hi - 1;
-    }
-  }
-  Scale s;
-  s.lo = lo;
-  s.hi = hi;
-  s.log = axis.log;
-  return s;
 }
 
 // ---- drawing primitives -----------------------------------------------------------------
@@ -675,18 +550,11 @@ std::string lower_ext(const std::string& path) {
   return e;
 }
 
-void check(cairo_status_t st, const std::string& path, const char* what) {
-  if (st != CAIRO_STATUS_SUCCESS)
-    throw Error(Errc::io_error,
-                fmt::format("cannot {} '{}': {}", what, path, cairo_status_to_string(st)));
-}
-
 void check_range(const std::string& field, double v, double lo, double hi) {
   if (!(v >= lo && v <= hi)) throw Error::out_of_range(field, v, lo, hi);
 }
 
 }  // namespace
-
 Rgba palette_color(std::size_t index) {
   // Okabe & Ito (2008), "Color Universal Design"; yellow last (weak on white).
   static constexpr std::array<std::array<int, 3>, 8> kColors{{{0, 114, 178},
@@ -779,88 +647,6 @@ void write_figure(const Figure& figure, const std::string& path) {
     check(cairo_surface_write_to_png(surface.get(), path.c_str()), path, "write");
   cairo_surface_finish(surface.get());
   check(cairo_surface_status(surface.get()), path, "write");
-}
-
-// ---- images ----------------------------------------------------------------------------
-
-Image::Image(int w, int h, std::array<std::uint8_t, 3> fill) : width(w), height(h) {
-  if (w < 0 || h < 0) throw Error::invalid("image", "negative size");
-  rgb.resize(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 3);
-  for (std::size_t i = 0; i < rgb.size(); i += 3) {
-    rgb[i] = fill[0];
-    rgb[i + 1] = fill[1];
-    rgb[i + 2] = fill[2];
-  }
-}
-
-std::array<std::uint8_t, 3> Image::at(int x, int y) const {
-  const auto i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
-                  static_cast<std::size_t>(x)) * 3;
-  return {rgb.at(i), rgb.at(i + 1), rgb.at(i + 2)};
-}
-
-void Image::set(int x, int y, std::array<std::uint8_t, 3> c) {
-  const auto i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
-                  static_cast<std::size_t>(x)) * 3;
-  rgb.at(i) = c[0];
-  rgb.at(i + 1) = c[1];
-  rgb.at(i + 2) = c[2];
-}
-
-void write_png(const Image& image, const std::string& path) {
-  if (image.width <= 0 || image.height <= 0 ||
-      image.rgb.size() != static_cast<std::size_t>(image.width) *
-                              static_cast<std::size_t>(image.height) * 3)
-    throw Error::invalid("image", fmt::format("{}×{} image with {} bytes", image.width,
-                                              image.height, image.rgb.size()));
-  SurfacePtr s(cairo_image_surface_create(CAIRO_FORMAT_RGB24, image.width, image.height),
-               cairo_surface_destroy);
-  check(cairo_surface_status(s.get()), path, "create");
-  cairo_surface_flush(s.get());
-  unsigned char* data = cairo_image_surface_get_data(s.get());
-  const int stride = cairo_image_surface_get_stride(s.get());
-  for (int y = 0; y < image.height; ++y) {
-    auto* row = reinterpret_cast<std::uint32_t*>(data + static_cast<std::ptrdiff_t>(y) * stride);
-    for (int x = 0; x < image.width; ++x) {
-      const auto c = image.at(x, y);
-      row[x] = (std::uint32_t{c[0]} << 16) | (std::uint32_t{c[1]} << 8) | std::uint32_t{c[2]};
-    }
-  }
-  cairo_surface_mark_dirty(s.get());
-  check(cairo_surface_write_to_png(s.get(), path.c_str()), path, "write");
-}
-
-Image read_png(const std::string& path) {
-  SurfacePtr src(cairo_image_surface_create_from_png(path.c_str()), cairo_surface_destroy);
-  const auto st = cairo_surface_status(src.get());
-  if (st == CAIRO_STATUS_FILE_NOT_FOUND)
-    throw Error(Errc::not_found, fmt::format("PNG file '{}' not found", path));
-  if (st != CAIRO_STATUS_SUCCESS)
-    throw Error(Errc::parse_error,
-                fmt::format("cannot read PNG '{}': {}", path, cairo_status_to_string(st)));
-  const int w = cairo_image_surface_get_width(src.get());
-  const int h = cairo_image_surface_get_height(src.get());
-  // Composite over white into a known layout, whatever the PNG's colour type was.
-  SurfacePtr dst(cairo_image_surface_create(CAIRO_FORMAT_RGB24, w, h), cairo_surface_destroy);
-  {
-    ContextPtr cr(cairo_create(dst.get()), cairo_destroy);
-    cairo_set_source_rgb(cr.get(), 1, 1, 1);
-    cairo_paint(cr.get());
-    cairo_set_source_surface(cr.get(), src.get(), 0, 0);
-    cairo_paint(cr.get());
-  }
-  cairo_surface_flush(dst.get());
-  const unsigned char* data = cairo_image_surface_get_data(dst.get());
-  const int stride = cairo_image_surface_get_stride(dst.get());
-  Image img(w, h);
-  for (int y = 0; y < h; ++y) {
-    const auto* row =
-        reinterpret_cast<const std::uint32_t*>(data + static_cast<std::ptrdiff_t>(y) * stride);
-    for (int x = 0; x < w; ++x)
-      img.set(x, y, {static_cast<std::uint8_t>(row[x] >> 16), static_cast<std::uint8_t>(row[x] >> 8),
-                     static_cast<std::uint8_t>(row[x])});
-  }
-  return img;
 }
 
 }  // namespace gonio::twin
