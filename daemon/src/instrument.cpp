@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "gonio/drivers/registry.hpp"
+#include "gonio/registry/registry.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/text.hpp"
 

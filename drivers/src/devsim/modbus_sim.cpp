@@ -8,7 +8,7 @@
 // libmodbus RTU context only answers one slave id), and replies are built by libmodbus into
 // a pipe, from which they are copied to the pty — so that they can be captured and, on
 // request, corrupted.
-#include "gonio/drivers/devsim/modbus_sim.hpp"
+#include "gonio/sim/devsim/modbus_sim.hpp"
 
 #include <fcntl.h>
 #include <netinet/in.h>

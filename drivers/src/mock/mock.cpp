@@ -2,7 +2,7 @@
 // Photometer. Readings come from the twin at the geometry where the arms stand; noise,
 // lamp drift and faults are drawn from one seeded generator on a virtual clock, so a run
 // is the same for the same seed and the same sequence of calls.
-#include "gonio/drivers/mock.hpp"
+#include "gonio/sim/mock/mock.hpp"
 
 #include <atomic>
 #include <cmath>
@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
-#include "gonio/drivers/collision.hpp"
+#include "gonio/drivers/motion/collision.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/json_util.hpp"
 #include "gonio/twin/twin.hpp"

@@ -1,14 +1,14 @@
 // The static driver table and the instrument factory (registry.hpp).
-#include "gonio/drivers/registry.hpp"
+#include "gonio/registry/registry.hpp"
 
 #include <array>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "gonio/drivers/mock.hpp"
+#include "gonio/sim/mock/mock.hpp"
 #include "gonio/drivers/modbus/modbus_motion.hpp"
-#include "gonio/drivers/scpi.hpp"
+#include "gonio/drivers/scpi/scpi.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/json_util.hpp"
 

@@ -39,9 +39,9 @@
 #include "gonio/daemon/hub.hpp"
 #include "gonio/daemon/store.hpp"
 #include "gonio/daemon/twin_service.hpp"
-#include "gonio/drivers/collision.hpp"
-#include "gonio/drivers/motion_controller.hpp"
-#include "gonio/drivers/photometer.hpp"
+#include "gonio/drivers/motion/collision.hpp"
+#include "gonio/drivers/motion/motion_controller.hpp"
+#include "gonio/drivers/photometer/photometer.hpp"
 
 namespace gonio::daemon {
 

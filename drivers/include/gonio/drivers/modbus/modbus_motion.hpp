@@ -33,10 +33,10 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "gonio/drivers/collision.hpp"
+#include "gonio/drivers/motion/collision.hpp"
 #include "gonio/drivers/modbus/link.hpp"
 #include "gonio/drivers/modbus/register_map.hpp"
-#include "gonio/drivers/motion_controller.hpp"
+#include "gonio/drivers/motion/motion_controller.hpp"
 
 namespace gonio::drivers {
 

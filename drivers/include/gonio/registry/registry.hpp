@@ -2,11 +2,11 @@
 // (DESIGN §7.4: the mock is a driver like any other).
 //
 //   name          motion  photometer  what
-//   modbus        yes     -           Modbus RTU/TCP motion controllers (modbus_motion.hpp)
-//   mock          yes     yes         the twin-backed virtual lab (mock.hpp)
-//   scpi-serial   -       yes         SCPI photometer on a serial line (serial.hpp keys)
-//   scpi-tcp      -       yes         SCPI photometer on a raw TCP socket (transport_tcp.hpp)
-//   scpi-usbtmc   -       yes         SCPI photometer over USBTMC via libusb (key "usb")
+//   modbus        yes     -           Modbus RTU/TCP motion controllers (modbus/modbus_motion.hpp)
+//   mock          yes     yes         the twin-backed virtual lab (sim/mock/mock.hpp)
+//   scpi-serial   -       yes         SCPI photometer on a serial line (transport/serial.hpp)
+//   scpi-tcp      -       yes         SCPI photometer on a raw TCP socket (transport/tcp.hpp)
+//   scpi-usbtmc   -       yes         SCPI photometer over USBTMC via libusb (usbtmc/usbtmc.hpp)
 //
 // Instrument config (JSON, strict): {"motion": {"driver": NAME, ...driver keys},
 // "photometer": {"driver": NAME, ...driver keys}}. When both sides are "mock", the lab is
@@ -20,8 +20,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "gonio/drivers/motion_controller.hpp"
-#include "gonio/drivers/photometer.hpp"
+#include "gonio/drivers/motion/motion_controller.hpp"
+#include "gonio/drivers/photometer/photometer.hpp"
 
 namespace gonio::drivers {
 

@@ -36,9 +36,9 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "gonio/drivers/motion_controller.hpp"
-#include "gonio/drivers/photometer.hpp"
-#include "gonio/drivers/scpi_sim.hpp"
+#include "gonio/drivers/motion/motion_controller.hpp"
+#include "gonio/drivers/photometer/photometer.hpp"
+#include "gonio/sim/devsim/scpi_sim.hpp"
 
 namespace gonio::twin {
 class Twin;

@@ -8,7 +8,7 @@
 // A controller drives a subset of them (axes()); the others throw Error(unsupported).
 //
 // Moves are absolute and blocking: move() returns when the axis is in position at the
-// target, or throws. Soft limits and the arm collision guard (collision.hpp) are checked
+// target, or throws. Soft limits and the arm collision guard (motion/collision.hpp) are checked
 // before anything is sent to the device. Every call blocks for at most its timeout and
 // fails with gonio::Error:
 //   timeout          the device did not answer, or the motion did not finish, in time
