@@ -287,6 +287,8 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
       };
       pair("incidence", c.limits.incidence_min, c.limits.incidence_max, 0, 89.9);
       pair("receive", c.limits.receive_min, c.limits.receive_max, -180, 180);
+      pair("rotation", c.limits.rotation_min, c.limits.rotation_max, -360, 360);
+      pair("tilt", c.limits.tilt_min, c.limits.tilt_max, -360, 360);
       if (l.has("min_separation")) c.limits.min_separation = number_in(l, "min_separation", 0, 0, 179);
       l.finish();
     }

@@ -9,7 +9,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "gonio/drivers/registry.hpp"
+#include "gonio/registry/registry.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/text.hpp"
 #include "instrument_run.hpp"
@@ -45,11 +45,18 @@ bool is_config_error(const Error& e, const Config& c) {
 Instrument::Instrument(const Config& config, Store& store, TwinService& twin, AlertService& alerts,
                        Hub& hub)
     : config_(config), store_(store), twin_(twin), alerts_(alerts), hub_(hub),
-      guard_(config.limits.min_separation.value_or(twin.profile().arms.min_separation_deg)) {
+      // The one guard, from [instrument.limits]: open_devices() hands it to the registry,
+      // which wraps the motion controller with it; plans are validated against it too.
+      guard_([&] {
+        try {
+          return drivers::motion_guard(config.limits, config.motion);
+        } catch (const Error& e) {
+          throw Error(e.code(), fmt::format("instrument.{}", e.what()),
+                      join_field("instrument", e.field()));
+        }
+      }()) {
   divergence_ = DivergenceSettings{config.z_threshold, config.delta_e_threshold,
                                    config.sustained_m, config.sustained_n, config.reference_drift};
-  guard_.set_limits(Axis::incidence, {config.limits.incidence_min, config.limits.incidence_max});
-  guard_.set_limits(Axis::receive, {config.limits.receive_min, config.limits.receive_max});
 }
 
 Instrument::~Instrument() { shutdown(); }
@@ -89,7 +96,8 @@ void Instrument::beat() { heartbeat_ns_ = Clock::now().time_since_epoch().count(
 void Instrument::open_devices() {
   try {
     auto inst = drivers::open_instrument(json{{"motion", config_.motion},
-                                              {"photometer", config_.photometer}});
+                                              {"photometer", config_.photometer}},
+                                         guard_);
     const auto axes = inst.motion->axes();
     beat();
     const auto grid = inst.photometer->wavelengths(config_.measure_timeout);

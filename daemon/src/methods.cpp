@@ -12,7 +12,7 @@
 #include <spdlog/spdlog.h>
 
 #include "gonio/daemon/export.hpp"
-#include "gonio/drivers/motion_controller.hpp"
+#include "gonio/drivers/motion/motion_controller.hpp"
 #include "gonio/proto/json_util.hpp"
 #include "gonio/proto/text.hpp"
 

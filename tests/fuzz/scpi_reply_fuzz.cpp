@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string_view>
 
-#include "gonio/drivers/scpi.hpp"
+#include "gonio/drivers/scpi/scpi.hpp"
 #include "gonio/proto/error.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -6,7 +6,7 @@
 #include <span>
 #include <vector>
 
-#include "gonio/drivers/usbtmc.hpp"
+#include "gonio/drivers/usbtmc/usbtmc.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace {

@@ -14,9 +14,9 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
-#include "gonio/drivers/devsim/modbus_sim.hpp"
-#include "gonio/drivers/mock.hpp"
-#include "gonio/drivers/scpi_sim.hpp"
+#include "gonio/sim/devsim/modbus_sim.hpp"
+#include "gonio/sim/mock/mock.hpp"
+#include "gonio/sim/devsim/scpi_sim.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/version.hpp"
 #include "gonio/twin/twin.hpp"

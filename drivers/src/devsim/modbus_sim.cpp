@@ -1,6 +1,7 @@
-// ModbusSim: the AZ-compatible Modbus server — libmodbus on TCP and on a pty (RTU), one
-// SimAxis per unit id, the register image kept in a libmodbus mapping per unit, faults
-// and capture (behaviour documented in modbus_sim.hpp).
+// ModbusSim: the serving loop of the AZ-compatible Modbus simulator — libmodbus on TCP and
+// on a pty (RTU), one SimUnit per unit id (its register behaviour is in
+// modbus_sim_unit.cpp, the motion in modbus_sim_axis.cpp), faults and capture (behaviour
+// documented in modbus_sim.hpp).
 //
 // One thread serves everything through poll(): the listening socket, the TCP clients, the
 // pty master and a wake-up pipe. libmodbus frames TCP requests (modbus_receive) and builds
@@ -8,7 +9,7 @@
 // libmodbus RTU context only answers one slave id), and replies are built by libmodbus into
 // a pipe, from which they are copied to the pty — so that they can be captured and, on
 // request, corrupted.
-#include "gonio/drivers/devsim/modbus_sim.hpp"
+#include "gonio/sim/devsim/modbus_sim.hpp"
 
 #include <fcntl.h>
 #include <netinet/in.h>
@@ -36,14 +37,11 @@
 
 #include "gonio/drivers/modbus/rtu_frame.hpp"
 #include "gonio/proto/error.hpp"
-#include "gonio/proto/json_util.hpp"
 
 namespace gonio::drivers::devsim {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using modbus::RegisterMap;
-using json_util::ObjectReader;
 
 Error sys_error(const std::string& what) {
   return Error(Errc::io_error, fmt::format("modbus simulator: {}: {}", what, std::strerror(errno)));
@@ -55,190 +53,31 @@ std::string hex(const std::uint8_t* p, std::size_t n) {
   return s;
 }
 
-std::optional<SimFault> read_fault(ObjectReader& parent, const std::string& key, bool alarm) {
-  const auto* j = parent.raw(key);
-  if (j == nullptr) return std::nullopt;
-  ObjectReader r(*j, parent.path(key));
-  SimFault f;
-  f.move = static_cast<int>(r.required<long long>("move"));
-  if (f.move < 1 || f.move > 1000000) throw Error::out_of_range(r.path("move"), f.move, 1, 1000000);
-  f.fraction = r.optional<double>("fraction", 0.5);
-  if (!(f.fraction >= 0 && f.fraction <= 1)) throw Error::out_of_range(r.path("fraction"), f.fraction, 0, 1);
-  if (alarm) {
-    const auto code = r.optional<long long>("code", 0x30);
-    if (code < 1 || code > 0xFFFF) throw Error::out_of_range(r.path("code"), static_cast<double>(code), 1, 65535);
-    f.code = static_cast<std::uint32_t>(code);
-  }
-  r.finish();
-  return f;
-}
-
-double read_range(ObjectReader& r, const std::string& key, double fallback, double lo, double hi) {
-  const double v = r.optional<double>(key, fallback);
-  if (!(v >= lo && v <= hi)) throw Error::out_of_range(r.path(key), v, lo, hi);
-  return v;
-}
-
 }  // namespace
-
-ModbusSimConfig ModbusSimConfig::from_json(const nlohmann::json& j) {
-  ObjectReader r(j, "");
-  ModbusSimConfig c;
-  if (const auto* t = r.raw("tcp")) {
-    ObjectReader tr(*t, "tcp");
-    c.tcp_host = tr.optional<std::string>("host", "127.0.0.1");
-    const auto port = tr.optional<long long>("port", 0);
-    if (port < 0 || port > 65535) throw Error::out_of_range(tr.path("port"), static_cast<double>(port), 0, 65535);
-    c.tcp_port = static_cast<int>(port);
-    tr.finish();
-  }
-  c.rtu = r.optional<bool>("rtu", false);
-  const auto motion = r.optional<std::string>("motion", "profile");
-  if (motion != "profile" && motion != "instant")
-    throw Error::invalid("motion", fmt::format("'{}' is not one of profile, instant", motion));
-  c.instant = motion == "instant";
-  if (const auto* m = r.raw("register_map")) c.map = RegisterMap::from_json(*m, "register_map");
-  c.record_path = r.optional<std::string>("record", "");
-  const auto* units = r.raw("units");
-  if (units == nullptr || !units->is_array() || units->empty())
-    throw Error::invalid("units", "expected a non-empty array of simulated axes");
-  for (std::size_t i = 0; i < units->size(); ++i) {
-    const std::string ctx = fmt::format("units[{}]", i);
-    ObjectReader ur((*units)[i], ctx);
-    SimAxisConfig a;
-    const auto unit = ur.required<long long>("unit");
-    if (unit < 1 || unit > 247) throw Error::out_of_range(ur.path("unit"), static_cast<double>(unit), 1, 247);
-    a.unit = static_cast<int>(unit);
-    for (const auto& other : c.units)
-      if (other.unit == a.unit)
-        throw Error::invalid(ur.path("unit"), fmt::format("unit {} appears twice", a.unit));
-    a.position_steps = static_cast<std::int32_t>(read_range(ur, "position_steps", 0, -2147483647.0, 2147483647.0));
-    a.in_position_band_steps = read_range(ur, "in_position_band_steps", 2, 0, 1e6);
-    a.home_position_steps = static_cast<std::int32_t>(read_range(ur, "home_position_steps", 0, -2147483647.0, 2147483647.0));
-    a.home_speed_hz = read_range(ur, "home_speed_hz", 20000, 1, 1e7);
-    a.home_accel_hz_s = read_range(ur, "home_accel_hz_s", 200000, 1, 1e9);
-    a.alarm_at_move = read_fault(ur, "alarm_at_move", true);
-    a.stall_at_move = read_fault(ur, "stall_at_move", false);
-    ur.finish();
-    c.units.push_back(a);
-  }
-  r.finish();
-  if (!c.tcp_host && !c.rtu) throw Error::invalid("tcp", "the simulator needs tcp, rtu or both");
-  return c;
-}
 
 // --- the server ------------------------------------------------------------------------
 
 struct ModbusSim::Impl {
   struct Unit {
-    SimAxis axis;
-    modbus_mapping_t* mapping = nullptr;
-    std::uint16_t inputs = 0;  // last input command word
+    SimUnit regs;
     Clock::time_point updated;
   };
 
   explicit Impl(ModbusSimConfig c) : cfg(std::move(c)) {
-    int top = 0x200;
-    for (const int a : {cfg.map.input_command, cfg.map.output_status, cfg.map.alarm_code,
-                        cfg.map.feedback_position, cfg.map.command_position, cfg.map.trigger,
-                        cfg.map.data_no, cfg.map.position, cfg.map.speed, cfg.map.rate,
-                        cfg.map.stop_rate, cfg.map.current, cfg.map.operation_type})
-      top = std::max(top, a + 2);
-    top = std::min(top, 0x10000);
-    for (const auto& a : cfg.units) {
-      Unit u{SimAxis(a, cfg.instant), modbus_mapping_new_start_address(0, 0, 0, 0, 0,
-                                                                       static_cast<unsigned>(top), 0, 0),
-             0, Clock::now()};
-      if (u.mapping == nullptr) throw Error(Errc::internal, "modbus simulator: out of memory");
-      units.emplace(a.unit, std::move(u));
-    }
-    for (auto& [id, u] : units) sync(u);
+    for (const auto& a : cfg.units)
+      units.emplace(a.unit, Unit{SimUnit(a, cfg.map, cfg.instant), Clock::now()});
   }
 
-  ~Impl() {
-    shutdown();
-    for (auto& [id, u] : units) modbus_mapping_free(u.mapping);
-  }
-
-  // ---- register image ----
-  void put32(Unit& u, std::uint16_t addr, std::uint32_t v) {
-    const auto w = modbus::encode_u32(v, cfg.map.word_order);
-    u.mapping->tab_registers[addr] = w[0];
-    u.mapping->tab_registers[addr + 1] = w[1];
-  }
-  std::int32_t get_i32(const Unit& u, std::uint16_t addr) const {
-    return modbus::decode_i32(u.mapping->tab_registers[addr], u.mapping->tab_registers[addr + 1],
-                              cfg.map.word_order);
-  }
-
-  void sync(Unit& u) {
-    modbus::StatusBits st;
-    st.ready = u.axis.ready();
-    st.alarm = u.axis.alarm() != 0;
-    st.busy = u.axis.busy();
-    st.moving = u.axis.moving();
-    st.in_position = u.axis.in_position();
-    st.home_end = u.axis.home_end();
-    const std::uint16_t out = modbus::encode_status(st, cfg.map.output);
-    u.mapping->tab_registers[cfg.map.output_status] = out;
-    put32(u, cfg.map.alarm_code, u.axis.alarm());
-    put32(u, cfg.map.feedback_position, static_cast<std::uint32_t>(u.axis.feedback()));
-    put32(u, cfg.map.command_position, static_cast<std::uint32_t>(u.axis.command()));
-  }
+  ~Impl() { shutdown(); }
 
   void advance(Unit& u) {
     const auto now = Clock::now();
-    u.axis.advance(std::chrono::duration<double>(now - u.updated).count());
+    u.regs.advance(std::chrono::duration<double>(now - u.updated).count());
     u.updated = now;
   }
 
-  bool read_only(int first, int count) const {
-    const std::array<std::pair<int, int>, 4> ro{{{cfg.map.output_status, 1},
-                                                 {cfg.map.alarm_code, 2},
-                                                 {cfg.map.feedback_position, 2},
-                                                 {cfg.map.command_position, 2}}};
-    for (const auto& [a, n] : ro)
-      if (first < a + n && a < first + count) return true;
-    return false;
-  }
-
-  void start_direct(Unit& u) {
-    const auto& m = cfg.map;
-    if (get_i32(u, m.operation_type) != m.operation_type_absolute) {
-      spdlog::warn("modbus sim unit {}: operation type {} not simulated (only absolute {})",
-                   u.axis.config().unit, get_i32(u, m.operation_type), m.operation_type_absolute);
-      u.axis.raise_alarm(0x70);
-      return;
-    }
-    u.axis.start_move(get_i32(u, m.position), get_i32(u, m.speed),
-                      get_i32(u, m.rate) * m.rate_unit_hz_per_s,
-                      get_i32(u, m.stop_rate) * m.rate_unit_hz_per_s);
-  }
-
-  // Applies what a write changed: trigger and input command.
-  void after_write(Unit& u, int first, int count) {
-    const auto& m = cfg.map;
-    const auto touches = [&](int a, int n) { return first < a + n && a < first + count; };
-    if (touches(m.input_command, 1)) {
-      const std::uint16_t now = u.mapping->tab_registers[m.input_command];
-      const std::uint16_t rising = static_cast<std::uint16_t>(now & ~u.inputs);
-      const auto on = [&](int b) { return b >= 0 && ((now >> b) & 1u) != 0; };
-      const auto rose = [&](int b) { return b >= 0 && ((rising >> b) & 1u) != 0; };
-      u.inputs = now;
-      u.axis.set_stop(on(m.input.stop));
-      u.axis.set_free(on(m.input.free));
-      if (rose(m.input.alarm_reset)) u.axis.reset_alarm();
-      if (rose(m.input.zhome)) u.axis.start_home();
-      if (rose(m.input.start)) start_direct(u);
-    }
-    if (touches(m.trigger, 2)) {
-      const auto t = get_i32(u, m.trigger);
-      put32(u, m.trigger, 0);
-      if (t == m.trigger_value) start_direct(u);
-    }
-  }
-
-  // Handles one framed request; returns false when no reply should be sent.
+  // Handles one framed request; returns false when no reply should be sent. libmodbus
+  // answers it from the unit's register image; the unit then acts on what was written.
   bool handle(modbus_t* ctx, const std::uint8_t* req, int len, int header) {
     std::lock_guard lock(mu);
     ++requests;
@@ -248,7 +87,6 @@ struct ModbusSim::Impl {
     if (it == units.end()) return false;
     Unit& u = it->second;
     advance(u);
-    sync(u);
     const int fc = req[header];
     int first = -1, count = 0;
     if (len >= header + 5) {
@@ -257,13 +95,17 @@ struct ModbusSim::Impl {
       if (fc == 0x17 && len >= header + 9)
         first = (req[header + 5] << 8) | req[header + 6], count = (req[header + 7] << 8) | req[header + 8];
     }
-    if (first >= 0 && read_only(first, count)) {
+    if (first >= 0 && u.regs.read_only(first, count)) {
       modbus_reply_exception(ctx, req, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
       return true;
     }
-    const int rc = modbus_reply(ctx, req, len, u.mapping);
-    if (rc >= 0 && first >= 0) after_write(u, first, count);
-    sync(u);
+    // Holding registers only: no coils, no discrete inputs, no input registers.
+    const auto image = u.regs.registers();
+    modbus_mapping_t view{};
+    view.nb_registers = static_cast<int>(image.size());
+    view.tab_registers = image.data();
+    const int rc = modbus_reply(ctx, req, len, &view);
+    if (rc >= 0 && first >= 0) u.regs.written(first, count);
     return true;
   }
 
@@ -625,8 +467,7 @@ void ModbusSim::raise_alarm(int unit, std::uint32_t code) {
   std::lock_guard lock(impl_->mu);
   auto& u = impl_->units.at(unit);
   impl_->advance(u);
-  u.axis.raise_alarm(code);
-  impl_->sync(u);
+  u.regs.raise_alarm(code);
 }
 
 std::uint64_t ModbusSim::requests() const {
@@ -638,9 +479,9 @@ SimAxisSnapshot ModbusSim::axis(int unit) const {
   std::lock_guard lock(impl_->mu);
   auto& u = impl_->units.at(unit);
   impl_->advance(u);
-  impl_->sync(u);
-  return {u.axis.command(), u.axis.feedback(), u.axis.moving(), u.axis.ready(),
-          u.axis.home_end(), u.axis.alarm(), u.axis.moves_started()};
+  const SimAxis& a = u.regs.axis();
+  return {a.command(), a.feedback(), a.moving(), a.ready(), a.home_end(), a.alarm(),
+          a.moves_started()};
 }
 
 int run_modbus_sim(const nlohmann::json& config, std::ostream& out, const std::atomic<bool>& stop) {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <utility>
 
-#include "gonio/drivers/devsim/modbus_sim.hpp"
+#include "gonio/sim/devsim/modbus_sim.hpp"
 
 namespace gonio::drivers::devsim {
 namespace {

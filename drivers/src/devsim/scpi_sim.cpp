@@ -2,7 +2,7 @@
 // follows SCPI-1999 Vol. 1 §6.2 (short/long keyword forms, case-insensitive, optional nodes
 // in brackets, ';' separating commands of one program message, a leading ':' for the root);
 // errors go to a 10-entry queue read by SYST:ERR? (Vol. 2 §21.8; -350 on overflow).
-#include "gonio/drivers/scpi_sim.hpp"
+#include "gonio/sim/devsim/scpi_sim.hpp"
 
 #include <algorithm>
 #include <cctype>

@@ -17,7 +17,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "gonio/drivers/scpi_sim.hpp"
+#include "gonio/sim/devsim/scpi_sim.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::drivers::devsim {

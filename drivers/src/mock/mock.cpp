@@ -2,7 +2,7 @@
 // Photometer. Readings come from the twin at the geometry where the arms stand; noise,
 // lamp drift and faults are drawn from one seeded generator on a virtual clock, so a run
 // is the same for the same seed and the same sequence of calls.
-#include "gonio/drivers/mock.hpp"
+#include "gonio/sim/mock/mock.hpp"
 
 #include <atomic>
 #include <cmath>
@@ -16,7 +16,6 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
-#include "gonio/drivers/collision.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/json_util.hpp"
 #include "gonio/twin/twin.hpp"
@@ -132,7 +131,7 @@ devsim::BetaSource twin_beta_source(std::shared_ptr<const twin::Twin> tw,
 class Lab {
  public:
   explicit Lab(LabConfig c)
-      : cfg_(std::move(c)), rng_(cfg_.seed), guard_(cfg_.profile.arms.min_separation_deg) {
+      : cfg_(std::move(c)), rng_(cfg_.seed) {
     auto bsdf = twin::make_bsdf(cfg_.sample, cfg_.grid);
     twin_ = std::make_shared<twin::Twin>(cfg_.profile, std::move(bsdf), cfg_.grid);
     beta_ = twin_beta_source(twin_, cfg_.estimator);
@@ -152,10 +151,6 @@ class Lab {
     check_link();
     stop_ = false;
     const double from = pos_[axis_index(a)];
-    std::optional<double> other;
-    if (a == Axis::incidence) other = pos_[axis_index(Axis::receive)];
-    if (a == Axis::receive) other = pos_[axis_index(Axis::incidence)];
-    guard_.check_move(a, from, target, other);
     ++moves_;
     const bool stall = cfg_.faults.stall_at_move == moves_;
     const double dest = stall ? from + 0.5 * (target - from) : target;
@@ -322,7 +317,6 @@ class Lab {
   std::condition_variable cv_;
   std::atomic<bool> stop_{false};
   std::mt19937_64 rng_;
-  MotionGuard guard_;
   std::array<double, 4> pos_{};
   std::array<std::uint32_t, 4> alarm_{};
   std::array<bool, 4> homed_{};
@@ -388,6 +382,10 @@ std::unique_ptr<MotionController> make_mock_motion(const nlohmann::json& config)
 
 std::unique_ptr<Photometer> make_mock_photometer(const nlohmann::json& config) {
   return std::move(make_mock(config).photometer);
+}
+
+double default_min_separation(const nlohmann::json& config) {
+  return read_config(config).profile.arms.min_separation_deg;
 }
 
 }  // namespace gonio::drivers::mock

@@ -1,8 +1,9 @@
 // ModbusMotion: the MotionController for Modbus motion controllers (Oriental Motor AZ
 // direct data operation and compatible maps).
 //
-// A move:
-//   1. soft limits and the arm collision guard (no bytes sent for a rejected target);
+// Soft limits and the arm collision guard are not checked here: GuardedMotion
+// (motion/guarded_motion.hpp) does that before a move reaches this driver. A move:
+//   1. the target in device steps (out_of_range when beyond the int32 position range);
 //   2. one status read: an alarm present -> device_alarm, not READY -> busy;
 //   3. the direct data (operation type absolute, position, speed, rates, current) written
 //      as one 16-register block ending with the trigger, which starts the motion;
@@ -52,11 +53,10 @@ std::uint16_t mask(int b) { return modbus::input_word(b); }
 class ModbusMotion final : public MotionController {
  public:
   explicit ModbusMotion(const modbus::MotionConfig& cfg)
-      : cfg_(cfg), guard_(cfg.min_separation_deg) {
+      : cfg_(cfg) {
     for (const auto& l : cfg_.links)
       links_.emplace(l.name, std::make_unique<ModbusLink>(l, cfg_.timing));
     for (const auto& a : cfg_.axes) {
-      guard_.set_limits(a.axis, a.limits);
       auto& st = state_[static_cast<std::size_t>(a.axis)];
       st.cfg = &a;
       st.link = links_.at(a.link).get();
@@ -76,10 +76,10 @@ class ModbusMotion final : public MotionController {
     auto& st = axis_state(axis);
     const AxisConfig& a = *st.cfg;
     const std::string name(axis_name(axis));
-    guard_.check_limits(axis, target_deg);
+    if (!std::isfinite(target_deg))
+      throw Error(Errc::limit_violation,
+                  fmt::format("{}: target {} is not a finite angle", name, target_deg), name);
     const std::int32_t target = a.scale.to_steps(target_deg, name);
-
-    check_arms(axis, target_deg, deadline);
 
     const auto generation = stop_generation_.load();
     check_ready(st, name, poll(st, deadline));
@@ -107,7 +107,6 @@ class ModbusMotion final : public MotionController {
                     name);
     };
 
-    st.known.reset();
     spdlog::debug("modbus {}: move to {:g}° ({} steps)", name, target_deg, target);
     if (m.direct_block()) {
       // data no., operation type, position, speed, rate, stop rate, current, trigger.
@@ -149,12 +148,9 @@ class ModbusMotion final : public MotionController {
     const auto deadline = Clock::now() + timeout;
     auto& st = axis_state(axis);
     const std::string name(axis_name(axis));
-    // Homing ends at device position 0: the guard checks that path like a move's.
-    check_arms(axis, st.cfg->scale.to_degrees(0), deadline);
     const auto generation = stop_generation_.load();
     check_ready(st, name, poll(st, deadline));
     const auto& m = st.cfg->map;
-    st.known.reset();
     const bool started = pulse_input(st, name, m.input.zhome, deadline, generation, [&](const Raw& r) {
       return r.flags.busy || r.flags.moving || r.flags.home_end;
     });
@@ -180,7 +176,6 @@ class ModbusMotion final : public MotionController {
                   fmt::format("{}: alarm 0x{:02X} persists after reset (unit {})", name, r.alarm,
                               st.cfg->unit),
                   name);
-    st.known.reset();
   }
 
   void stop(milliseconds timeout) override {
@@ -226,7 +221,6 @@ class ModbusMotion final : public MotionController {
   struct AxisState {
     const AxisConfig* cfg = nullptr;
     ModbusLink* link = nullptr;
-    std::optional<double> known;  // last position read or reached, in degrees
   };
 
   AxisState& axis_state(Axis axis) {
@@ -236,28 +230,6 @@ class ModbusMotion final : public MotionController {
                   fmt::format("{}: this Modbus controller has no such axis", axis_name(axis)),
                   std::string(axis_name(axis)));
     return st;
-  }
-
-  // The collision guard for a move of `axis` to `target_deg` (arms only; the positions
-  // are the last known ones, read when unknown).
-  void check_arms(Axis axis, double target_deg, Clock::time_point deadline) {
-    if (guard_.min_separation_deg() <= 0 || (axis != Axis::incidence && axis != Axis::receive))
-      return;
-    const Axis other = axis == Axis::incidence ? Axis::receive : Axis::incidence;
-    if (!state_[static_cast<std::size_t>(other)].cfg) return;
-    const double from = known_position(axis, deadline);
-    const double other_deg = known_position(other, deadline);
-    guard_.check_move(axis, from, target_deg, other_deg);
-  }
-
-  double known_position(Axis axis, Clock::time_point deadline) {
-    auto& st = axis_state(axis);
-    if (!st.known) {
-      const auto& m = st.cfg->map;
-      const auto r = st.link->read(st.cfg->unit, m.feedback_position, 2, deadline);
-      st.known = st.cfg->scale.to_degrees(modbus::decode_i32(r[0], r[1], m.word_order));
-    }
-    return *st.known;
   }
 
   // Output status, alarm code, feedback and command positions, in as few reads as the
@@ -304,7 +276,6 @@ class ModbusMotion final : public MotionController {
     s.home_end = r.flags.home_end;
     s.position_deg = st.cfg->scale.to_degrees(r.feedback);
     s.command_deg = st.cfg->scale.to_degrees(r.command);
-    if (!s.moving) st.known = s.position_deg;
     return s;
   }
 
@@ -435,13 +406,11 @@ class ModbusMotion final : public MotionController {
       }
       std::this_thread::sleep_for(cfg_.poll_interval);
     }
-    st.known = a.scale.to_degrees(r.feedback);
   }
 
   Error following_error(AxisState& st, const std::string& name, const std::string& what,
                         const Raw& r) {
     const AxisConfig& a = *st.cfg;
-    st.known.reset();
     return Error(Errc::device_alarm,
                  fmt::format("{}: following error during {}: feedback {:g}° vs command {:g}° "
                              "({} steps apart, limit {:g}°; no device alarm code)",
@@ -453,7 +422,6 @@ class ModbusMotion final : public MotionController {
   }
 
   modbus::MotionConfig cfg_;
-  MotionGuard guard_;
   std::map<std::string, std::unique_ptr<ModbusLink>> links_;
   std::array<AxisState, kAllAxes.size()> state_{};
   std::atomic<std::uint64_t> stop_generation_{0};

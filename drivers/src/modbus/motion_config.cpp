@@ -1,5 +1,8 @@
 // Strict reading of the Modbus motion driver's JSON configuration (format in
-// modbus_motion.hpp): links, timing, per-axis scale, limits, motion profile and map.
+// modbus_motion.hpp): links, timing, per-axis scale, motion profile and map. Soft limits
+// and the arms' minimum separation are not driver keys: they live in the instrument's one
+// limits table ([instrument.limits], motion/limits.hpp); an old config that still has them
+// is refused with an error that says so.
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -66,11 +69,24 @@ LinkConfig read_link(const std::string& name, const nlohmann::json& j, const std
   return link;
 }
 
+// Keys of older configs whose meaning moved to [instrument.limits].
+void reject_moved(ObjectReader& r, const std::string& key, const std::string& instead) {
+  if (r.has(key))
+    throw Error::invalid(r.path(key),
+                         fmt::format("is no longer a Modbus driver key: soft limits now live in "
+                                     "[instrument.limits] ({}); move the value there and remove "
+                                     "this key",
+                                     instead));
+}
+
 AxisConfig read_axis(Axis axis, const nlohmann::json& j, const std::string& ctx,
                      const RegisterMap& default_map, const std::vector<LinkConfig>& links) {
   ObjectReader r(j, ctx);
   AxisConfig a;
   a.axis = axis;
+  const std::string name(axis_name(axis));
+  reject_moved(r, "min_deg", fmt::format("{} = [MIN, MAX]", name));
+  reject_moved(r, "max_deg", fmt::format("{} = [MIN, MAX]", name));
   if (links.size() == 1 && !r.has("link")) {
     r.raw("link");
     a.link = links.front().name;
@@ -91,14 +107,6 @@ AxisConfig read_axis(Axis axis, const nlohmann::json& j, const std::string& ctx,
                             r.path("steps_per_degree"), a.scale.steps_per_degree),
                 r.path("steps_per_degree"));
   a.scale.zero_deg = ranged(r, "zero_deg", 0, -3600, 3600, "°");
-  a.limits.min_deg = ranged(r, "min_deg", -360, -1e6, 1e6, "°");
-  a.limits.max_deg = ranged(r, "max_deg", 360, -1e6, 1e6, "°");
-  if (a.limits.min_deg > a.limits.max_deg)
-    throw Error::invalid(r.path("max_deg"), fmt::format("{:g}° is below min_deg {:g}°",
-                                                        a.limits.max_deg, a.limits.min_deg));
-  // The limits must be reachable in steps (int32).
-  a.scale.to_steps(a.limits.min_deg, r.path("min_deg"));
-  a.scale.to_steps(a.limits.max_deg, r.path("max_deg"));
   a.speed_deg_s = ranged(r, "speed_deg_s", 10, 1e-3, 1e4, "°/s");
   a.accel_deg_s2 = ranged(r, "accel_deg_s2", 50, 1e-3, 1e6, "°/s²");
   a.decel_deg_s2 = ranged(r, "decel_deg_s2", a.accel_deg_s2, 1e-3, 1e6, "°/s²");
@@ -148,6 +156,7 @@ void parse_serial_format(const std::string& field, const std::string& format, Li
 MotionConfig MotionConfig::from_json(const nlohmann::json& j) {
   ObjectReader r(j, "");
   MotionConfig c;
+  reject_moved(r, "min_separation_deg", "min_separation");
   const auto* links = r.raw("links");
   if (links == nullptr) throw Error::invalid("links", "is required");
   if (!links->is_object() || links->empty())
@@ -171,7 +180,6 @@ MotionConfig MotionConfig::from_json(const nlohmann::json& j) {
   }
   c.poll_interval = milliseconds(ranged_int(r, "poll_interval_ms", 10, 1, 1000));
   c.settle_timeout = milliseconds(ranged_int(r, "settle_timeout_ms", 1000, 0, 60000));
-  c.min_separation_deg = ranged(r, "min_separation_deg", 0, 0, 179, "°");
 
   const auto* axes = r.raw("axes");
   if (axes == nullptr) throw Error::invalid("axes", "is required");

@@ -1,5 +1,5 @@
-// MotionGuard: soft limits and the arm collision guard (geometry in collision.hpp).
-#include "gonio/drivers/collision.hpp"
+// MotionGuard: soft limits and the arm collision guard (geometry in motion/collision.hpp).
+#include "gonio/drivers/motion/collision.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 // Small functions of the MotionController interface shared by every motion driver: axis names
 // and the human form of an axis status.
-#include "gonio/drivers/motion_controller.hpp"
+#include "gonio/drivers/motion/motion_controller.hpp"
 
 #include <algorithm>
 

@@ -4,7 +4,6 @@
 #include "gonio/drivers/probe/modbus_probe.hpp"
 
 #include <cmath>
-#include <limits>
 #include <ostream>
 
 #include <fmt/format.h>
@@ -91,10 +90,9 @@ modbus::MotionConfig build_config(const ModbusAxisOptions& o) {
   a.link = "probe";
   a.unit = o.unit;
   a.map = modbus::RegisterMap::preset(o.preset);
+  // The device's own range (int32 steps) is the only limit here: the driver refuses
+  // targets beyond it.
   a.scale.steps_per_degree = o.steps_per_degree;
-  // The device's own range is the only limit here (int32 steps).
-  const double reach = std::numeric_limits<std::int32_t>::max() / o.steps_per_degree;
-  a.limits = {-reach, reach};
   a.speed_deg_s = o.speed_deg_s;
   a.accel_deg_s2 = o.speed_deg_s * 5;
   a.decel_deg_s2 = o.speed_deg_s * 5;

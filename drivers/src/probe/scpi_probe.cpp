@@ -10,10 +10,10 @@
 #include <fmt/format.h>
 #include <fmt/ostream.h>
 
-#include "gonio/drivers/scpi.hpp"
-#include "gonio/drivers/serial.hpp"
-#include "gonio/drivers/transport_tcp.hpp"
-#include "gonio/drivers/usbtmc.hpp"
+#include "gonio/drivers/scpi/scpi.hpp"
+#include "gonio/drivers/transport/serial.hpp"
+#include "gonio/drivers/transport/tcp.hpp"
+#include "gonio/drivers/usbtmc/usbtmc.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::drivers::probe {

@@ -1,14 +1,14 @@
 // The static driver table and the instrument factory (registry.hpp).
-#include "gonio/drivers/registry.hpp"
+#include "gonio/registry/registry.hpp"
 
 #include <array>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "gonio/drivers/mock.hpp"
+#include "gonio/sim/mock/mock.hpp"
 #include "gonio/drivers/modbus/modbus_motion.hpp"
-#include "gonio/drivers/scpi.hpp"
+#include "gonio/drivers/scpi/scpi.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/json_util.hpp"
 
@@ -24,7 +24,7 @@ const std::array<DriverInfo, 5> kDrivers{{
     {"modbus", "Modbus RTU/TCP motion controllers (Oriental Motor AZ preset)", true, false, true,
      &modbus_motion, nullptr},
     {"mock", "virtual lab driven by the twin (no hardware)", true, true, false,
-     &mock::make_mock_motion, &mock::make_mock_photometer},
+     &mock::make_mock_motion, &mock::make_mock_photometer, &mock::default_min_separation},
     {"scpi-serial", "SCPI photometer on a serial line", false, true, true, nullptr, &scpi_serial},
     {"scpi-tcp", "SCPI photometer on a raw TCP socket", false, true, true, nullptr, &scpi_tcp},
     {"scpi-usbtmc", "SCPI photometer over USBTMC (libusb)", false, true, true, nullptr, &scpi_usbtmc},
@@ -34,6 +34,18 @@ std::string names() {
   std::string s;
   for (const auto& d : kDrivers) s += (s.empty() ? "" : ", ") + std::string(d.name);
   return s;
+}
+
+// Invalid config values get the side's name in front of their field ("motion.seed").
+template <typename F>
+auto prefixed(const std::string& prefix, F&& f) {
+  try {
+    return f();
+  } catch (const Error& e) {
+    if (e.code() == Errc::invalid_argument || e.code() == Errc::out_of_range)
+      throw json_util::prefixed(e, prefix);
+    throw;
+  }
 }
 
 // Splits {"driver": X, ...rest}.
@@ -70,7 +82,25 @@ std::unique_ptr<Photometer> make_photometer(std::string_view driver, const nlohm
   return d.make_photometer(config);
 }
 
-Instrument open_instrument(const nlohmann::json& config) {
+MotionGuard motion_guard(const MotionLimits& limits, const nlohmann::json& motion) {
+  if (limits.min_separation) return limits.guard(*limits.min_separation);
+  const auto side = split(motion, "motion");
+  const nlohmann::json& cfg = side.second;
+  const auto& d = find_driver(side.first);
+  const double sep = d.default_min_separation
+                         ? prefixed("motion", [&] { return d.default_min_separation(cfg); })
+                         : kDefaultMinSeparationDeg;
+  return limits.guard(sep);
+}
+
+Instrument open_instrument(const nlohmann::json& config, const MotionLimits& limits) {
+  json_util::ObjectReader r(config, "");
+  const auto* m = r.raw("motion");
+  if (m == nullptr) throw Error::invalid("motion", "is required");
+  return open_instrument(config, motion_guard(limits, *m));
+}
+
+Instrument open_instrument(const nlohmann::json& config, const MotionGuard& guard) {
   json_util::ObjectReader r(config, "");
   const auto* m = r.raw("motion");
   const auto* p = r.raw("photometer");
@@ -85,14 +115,9 @@ Instrument open_instrument(const nlohmann::json& config) {
   const nlohmann::json mcfg = std::move(motion_split.second);
   const std::string pname = std::move(photometer_split.first);
   const nlohmann::json pcfg = std::move(photometer_split.second);
-  const auto wrap = [](const std::string& prefix, auto&& f) {
-    try {
-      return f();
-    } catch (const Error& e) {
-      if (e.code() == Errc::invalid_argument || e.code() == Errc::out_of_range)
-        throw json_util::prefixed(e, prefix);
-      throw;
-    }
+  const auto wrap = [](const std::string& prefix, auto&& f) { return prefixed(prefix, f); };
+  const auto guarded = [&](std::unique_ptr<MotionController> motion) {
+    return std::make_unique<GuardedMotion>(std::move(motion), guard);
   };
   Instrument out;
   if (mname == "mock" && pname == "mock") {
@@ -100,7 +125,7 @@ Instrument open_instrument(const nlohmann::json& config) {
       throw Error::invalid("photometer", "a mock photometer shares the motion side's lab: "
                                          "configure it under \"motion\"");
     auto lab = wrap("motion", [&] { return mock::make_mock(mcfg); });
-    out.motion = std::move(lab.motion);
+    out.motion = guarded(std::move(lab.motion));
     out.photometer = std::move(lab.photometer);
     return out;
   }
@@ -109,7 +134,7 @@ Instrument open_instrument(const nlohmann::json& config) {
   if (!md.make_motion) throw Error::invalid("motion.driver", fmt::format("'{}' has no motion side", mname));
   if (!pd.make_photometer)
     throw Error::invalid("photometer.driver", fmt::format("'{}' has no photometer side", pname));
-  out.motion = wrap("motion", [&] { return md.make_motion(mcfg); });
+  out.motion = guarded(wrap("motion", [&] { return md.make_motion(mcfg); }));
   out.photometer = wrap("photometer", [&] { return pd.make_photometer(pcfg); });
   return out;
 }

@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
-#include "gonio/drivers/scpi.hpp"
+#include "gonio/drivers/scpi/scpi.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/json_util.hpp"
 

@@ -4,7 +4,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "gonio/drivers/scpi.hpp"
+#include "gonio/drivers/scpi/scpi.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::drivers::scpi {

@@ -6,7 +6,7 @@
 #include <atomic>
 #include <string>
 
-#include "gonio/drivers/transport.hpp"
+#include "gonio/drivers/transport/transport.hpp"
 
 namespace gonio::drivers::detail {
 

@@ -1,7 +1,7 @@
 // Serial line transport: termios raw mode (cfmakeraw), baud / data bits / parity / stop
 // bits / RTS-CTS from config, CLOCAL so modem lines are ignored, exclusive flock().
 // Works on USB-serial adapters and on pseudo-terminals (the simulators use those).
-#include "gonio/drivers/serial.hpp"
+#include "gonio/drivers/transport/serial.hpp"
 
 #include <array>
 #include <cerrno>

@@ -1,6 +1,6 @@
 // Raw TCP socket transport: getaddrinfo, non-blocking connect bounded by a timeout,
 // TCP_NODELAY (SCPI commands are short and latency-bound).
-#include "gonio/drivers/transport_tcp.hpp"
+#include "gonio/drivers/transport/tcp.hpp"
 
 #include <cerrno>
 #include <charconv>

@@ -1,9 +1,9 @@
 // read_transport: the transport factory used by the SCPI photometer registry entries.
 #include <fmt/format.h>
 
-#include "gonio/drivers/serial.hpp"
-#include "gonio/drivers/transport_tcp.hpp"
-#include "gonio/drivers/usbtmc.hpp"
+#include "gonio/drivers/transport/serial.hpp"
+#include "gonio/drivers/transport/tcp.hpp"
+#include "gonio/drivers/usbtmc/usbtmc.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/json_util.hpp"
 

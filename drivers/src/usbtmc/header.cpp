@@ -3,7 +3,7 @@
 // Table 9). All multi-byte fields are little endian (§3, "USBTMC uses little endian").
 #include <fmt/format.h>
 
-#include "gonio/drivers/usbtmc.hpp"
+#include "gonio/drivers/usbtmc/usbtmc.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::drivers::usbtmc {

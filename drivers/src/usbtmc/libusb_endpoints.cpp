@@ -9,7 +9,7 @@
 
 #include <fmt/format.h>
 
-#include "gonio/drivers/usbtmc.hpp"
+#include "gonio/drivers/usbtmc/usbtmc.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::drivers::usbtmc {

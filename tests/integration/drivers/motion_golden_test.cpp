@@ -21,7 +21,7 @@
 
 #include <gtest/gtest.h>
 
-#include "gonio/drivers/devsim/modbus_sim.hpp"
+#include "gonio/sim/devsim/modbus_sim.hpp"
 #include "gonio/drivers/modbus/modbus_motion.hpp"
 #include "gonio/drivers/modbus/rtu_frame.hpp"
 #include "motion_test_util.hpp"
@@ -76,22 +76,21 @@ std::vector<Exchange> load(const std::filesystem::path& p) {
 // traffic (speeds and rates are in the direct-data block).
 json golden_config(const std::string& device) {
   const auto ax = [](int unit) {
-    return json{{"unit", unit}, {"steps_per_degree", 100}, {"min_deg", -90}, {"max_deg", 90},
-                {"speed_deg_s", 50}, {"accel_deg_s2", 500}, {"in_position_deg", 0.02},
-                {"following_error_deg", 2}};
+    return json{{"unit", unit},          {"steps_per_degree", 100}, {"speed_deg_s", 50},
+                {"accel_deg_s2", 500},   {"in_position_deg", 0.02}, {"following_error_deg", 2}};
   };
   return json{{"links", {{"main", rtu_link(device)}}},
               {"response_timeout_ms", 100},
               {"retries", 1},
               {"poll_interval_ms", 5},
               {"settle_timeout_ms", 300},
-              {"min_separation_deg", 10},
               {"axes", {{"incidence", ax(1)}, {"receive", ax(2)}}}};
 }
 
-// The calls: status, two guarded moves, a readback, homing, status.
+// The calls: status, two guarded moves (the guard reads both arm positions back before
+// each), a readback, homing, status.
 void drive(const std::string& device) {
-  auto m = gonio::drivers::make_modbus_motion(golden_config(device));
+  auto m = guarded_motion(golden_config(device), 10);
   const auto s0 = m->status(Axis::incidence, 2s);
   EXPECT_TRUE(s0.ready);
   EXPECT_DOUBLE_EQ(s0.position_deg, 0);

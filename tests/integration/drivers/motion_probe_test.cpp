@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "gonio/drivers/devsim/modbus_sim.hpp"
+#include "gonio/sim/devsim/modbus_sim.hpp"
 #include "gonio/drivers/modbus/link.hpp"
 #include "gonio/drivers/probe/modbus_probe.hpp"
 #include "motion_test_util.hpp"

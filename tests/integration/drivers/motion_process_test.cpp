@@ -149,7 +149,7 @@ TEST_F(MotionProcess, ProbeDrivesTheSimulatorOverTcpAndRtu) {
 }
 
 TEST_F(MotionProcess, DriverAgainstTheSimulatorProcess) {
-  auto m = gonio::drivers::make_modbus_motion(driver_config(tcp_link(port_), 0));
+  auto m = gonio::drivers::make_modbus_motion(driver_config(tcp_link(port_)));
   m->move(Axis::receive, -15, 5s);
   m->move(Axis::incidence, 60, 5s);
   EXPECT_DOUBLE_EQ(m->position(Axis::receive, 1s), -15);

@@ -1,12 +1,12 @@
 // The Modbus motion driver over RTU on a real pty (115200 8E1) against the AZ simulator:
 // two units on one line, moves, homing, stop from another thread, timeouts, bad CRCs,
-// limits that send nothing, and an absent serial device.
+// limits that move nothing, and an absent serial device.
 #include <atomic>
 #include <thread>
 
 #include <gtest/gtest.h>
 
-#include "gonio/drivers/devsim/modbus_sim.hpp"
+#include "gonio/sim/devsim/modbus_sim.hpp"
 #include "gonio/drivers/modbus/modbus_motion.hpp"
 #include "motion_test_util.hpp"
 
@@ -24,7 +24,7 @@ class MotionRtu : public ::testing::Test {
     sim_ = std::make_unique<devsim::ModbusSim>(devsim::ModbusSimConfig::from_json(sim_config(false, true)));
     sim_->start();
     ASSERT_EQ(sim_->rtu_path().rfind("/dev/pts/", 0), 0u) << sim_->rtu_path();
-    motion_ = gonio::drivers::make_modbus_motion(driver_config(rtu_link(sim_->rtu_path())));
+    motion_ = guarded_motion(driver_config(rtu_link(sim_->rtu_path())));
   }
 
   std::unique_ptr<devsim::ModbusSim> sim_;
@@ -49,7 +49,7 @@ TEST_F(MotionRtu, TwoUnitsOnOneLine) {
 TEST_F(MotionRtu, StopFromAnotherThread) {
   auto cfg = driver_config(rtu_link(sim_->rtu_path()));
   cfg["axes"]["receive"]["speed_deg_s"] = 20;  // slow: the stop surely lands mid-move
-  motion_ = gonio::drivers::make_modbus_motion(cfg);
+  motion_ = guarded_motion(cfg);
   std::optional<gonio::Error> failure;
   std::thread mover([&] { failure = error_of([&] { motion_->move(Axis::receive, 85, 10s); }); });
   ASSERT_TRUE(wait_until([&] { return sim_->axis(2).moving && sim_->axis(2).command > 3100; }));
@@ -82,17 +82,18 @@ TEST_F(MotionRtu, BadCrcIsRetriedThenReported) {
   EXPECT_TRUE(motion_->status(Axis::incidence, 2s).ready);
 }
 
-TEST_F(MotionRtu, LimitViolationsSendNothing) {
-  motion_->status(Axis::incidence, 1s);
-  motion_->status(Axis::receive, 1s);
+TEST_F(MotionRtu, LimitViolationsMoveNothing) {
   const auto before = sim_->requests();
   EXPECT_EQ(error_of([&] { motion_->move(Axis::receive, -91, 1s); }).code(), Errc::limit_violation);
+  EXPECT_EQ(sim_->requests(), before);  // soft limits: not a single request
   EXPECT_EQ(error_of([&] { motion_->move(Axis::incidence, -25, 1s); }).code(), Errc::limit_violation);
-  EXPECT_EQ(sim_->requests(), before);
+  EXPECT_EQ(sim_->requests(), before + 2);  // the arm guard read both arm positions back
+  EXPECT_EQ(sim_->axis(1).moves, 0);
+  EXPECT_EQ(sim_->axis(2).moves, 0);
 }
 
 TEST(MotionRtuAbsent, MissingDeviceIsDisconnected) {
-  auto m = gonio::drivers::make_modbus_motion(driver_config(rtu_link("/dev/gonio-no-such-tty")));
+  auto m = guarded_motion(driver_config(rtu_link("/dev/gonio-no-such-tty")));
   const auto e = error_of([&] { m->status(Axis::incidence, 300ms); });
   EXPECT_EQ(e.code(), Errc::disconnected) << e.what();
   EXPECT_TRUE(mentions(e, "/dev/gonio-no-such-tty")) << e.what();

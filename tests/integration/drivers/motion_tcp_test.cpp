@@ -1,13 +1,13 @@
 // The Modbus motion driver against the AZ simulator over real TCP loopback sockets: moves,
 // readback, homing, stop from another thread, alarms, timeouts, dropped links and
-// reconnection with back-off, following error, and limits that send nothing.
+// reconnection with back-off, following error, and limits that move nothing.
 #include <atomic>
 #include <cmath>
 #include <thread>
 
 #include <gtest/gtest.h>
 
-#include "gonio/drivers/devsim/modbus_sim.hpp"
+#include "gonio/sim/devsim/modbus_sim.hpp"
 #include "gonio/drivers/modbus/link.hpp"
 #include "gonio/drivers/modbus/modbus_motion.hpp"
 #include "motion_test_util.hpp"
@@ -27,8 +27,8 @@ class MotionTcp : public ::testing::Test {
     sim_ = std::make_unique<devsim::ModbusSim>(
         devsim::ModbusSimConfig::from_json(sim_config(true, false, unit1, unit2)));
     sim_->start();
-    config_ = driver_config(tcp_link(sim_->tcp_port()), min_sep);
-    motion_ = gonio::drivers::make_modbus_motion(config_);
+    config_ = driver_config(tcp_link(sim_->tcp_port()));
+    motion_ = guarded_motion(config_, min_sep);
   }
   void SetUp() override { start(); }
 
@@ -85,7 +85,7 @@ TEST_F(MotionTcp, StopFromAnotherThreadInterruptsAMove) {
   // A slow axis (85° at 20°/s), so that the stop surely lands mid-move.
   auto cfg = config_;
   cfg["axes"]["incidence"]["speed_deg_s"] = 20;
-  motion_ = gonio::drivers::make_modbus_motion(cfg);
+  motion_ = guarded_motion(cfg);
   std::optional<gonio::Error> failure;
   std::thread mover([&] { failure = error_of([&] { motion_->move(Axis::incidence, 85, 10s); }); });
   ASSERT_TRUE(wait_until([&] { return sim_->axis(1).moving && sim_->axis(1).command > 100; }));
@@ -146,7 +146,7 @@ TEST_F(MotionTcp, TimeoutWhenTheDeviceStopsAnswering) {
 TEST_F(MotionTcp, UnknownUnitGetsNoAnswer) {
   auto cfg = config_;
   cfg["axes"]["receive"]["unit"] = 9;
-  auto m = gonio::drivers::make_modbus_motion(cfg);
+  auto m = guarded_motion(cfg);
   EXPECT_EQ(error_of([&] { m->status(Axis::receive, 1s); }).code(), Errc::timeout);
   EXPECT_TRUE(m->status(Axis::incidence, 1s).ready);  // the link itself is fine
 }
@@ -207,18 +207,19 @@ TEST_F(MotionTcp, FollowingErrorWhenTheMotorStalls) {
   EXPECT_NEAR(motion_->position(Axis::incidence, 1s), 10, 0.02);
 }
 
-TEST_F(MotionTcp, LimitViolationsSendNothing) {
-  // Learn both arm positions first (the guard needs them).
-  motion_->status(Axis::incidence, 1s);
-  motion_->status(Axis::receive, 1s);
+TEST_F(MotionTcp, LimitViolationsMoveNothing) {
   motion_->move(Axis::incidence, 45, 5s);
   const auto before = sim_->requests();
 
+  // Soft limits: not a single request.
   const auto soft = error_of([&] { motion_->move(Axis::incidence, 95, 1s); });
   EXPECT_EQ(soft.code(), Errc::limit_violation);
   EXPECT_EQ(soft.field(), "incidence");
   EXPECT_TRUE(mentions(soft, "95")) << soft.what();
   EXPECT_TRUE(mentions(soft, "90")) << soft.what();
+  EXPECT_EQ(sim_->requests(), before);
+
+  // The arm guard reads both arm positions back, and writes nothing.
 
   const auto arms = error_of([&] { motion_->move(Axis::receive, -40, 1s); });  // 5° apart
   EXPECT_EQ(arms.code(), Errc::limit_violation);
@@ -228,8 +229,9 @@ TEST_F(MotionTcp, LimitViolationsSendNothing) {
 
   const auto sweep = error_of([&] { motion_->move(Axis::receive, -80, 1s); });  // passes −45°
   EXPECT_EQ(sweep.code(), Errc::limit_violation);
-  EXPECT_EQ(sim_->requests(), before);
+  EXPECT_EQ(sim_->requests(), before + 4);  // two position reads per refused arm move
   EXPECT_EQ(sim_->axis(2).moves, 0);
+  EXPECT_EQ(sim_->axis(2).command, 30 * kStepsPerDegree);
 }
 
 TEST_F(MotionTcp, NotReadyIsBusy) {

@@ -4,11 +4,15 @@
 
 #include <chrono>
 #include <functional>
+#include <memory>
 #include <string>
 #include <thread>
 
 #include <nlohmann/json.hpp>
 
+#include "gonio/drivers/modbus/modbus_motion.hpp"
+#include "gonio/drivers/motion/guarded_motion.hpp"
+#include "gonio/drivers/motion/limits.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace motion_test {
@@ -34,8 +38,6 @@ inline json sim_config(bool tcp, bool rtu, json unit1_extra = json::object(),
 inline json axis(int unit, json extra = json::object()) {
   json a{{"unit", unit},
          {"steps_per_degree", kStepsPerDegree},
-         {"min_deg", -90},
-         {"max_deg", 90},
          {"speed_deg_s", 200},
          {"accel_deg_s2", 4000},
          {"in_position_deg", 0.02},
@@ -44,7 +46,7 @@ inline json axis(int unit, json extra = json::object()) {
   return a;
 }
 
-inline json driver_config(json link, double min_separation = 10) {
+inline json driver_config(json link) {
   return json{{"links", {{"main", link}}},
               {"response_timeout_ms", 100},
               {"byte_timeout_ms", 20},
@@ -52,8 +54,19 @@ inline json driver_config(json link, double min_separation = 10) {
               {"reconnect", {{"initial_ms", 20}, {"max_ms", 200}}},
               {"poll_interval_ms", 5},
               {"settle_timeout_ms", 300},
-              {"min_separation_deg", min_separation},
               {"axes", {{"incidence", axis(1)}, {"receive", axis(2)}}}};
+}
+
+// The Modbus driver for `config` as an instrument uses it: inside the GuardedMotion of a
+// limits table with both arms within ±90° and at least `min_separation` apart.
+inline std::unique_ptr<gonio::drivers::MotionController> guarded_motion(const json& config,
+                                                                        double min_separation = 10) {
+  gonio::drivers::MotionLimits limits;
+  limits.incidence_min = limits.receive_min = -90;
+  limits.incidence_max = limits.receive_max = 90;
+  limits.min_separation = min_separation;
+  return std::make_unique<gonio::drivers::GuardedMotion>(
+      gonio::drivers::make_modbus_motion(config), limits.guard(min_separation));
 }
 
 inline json tcp_link(int port) {

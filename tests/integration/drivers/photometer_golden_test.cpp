@@ -8,9 +8,9 @@
 
 #include <gtest/gtest.h>
 
-#include "gonio/drivers/scpi.hpp"
-#include "gonio/drivers/scpi_sim.hpp"
-#include "gonio/drivers/transport_tcp.hpp"
+#include "gonio/drivers/scpi/scpi.hpp"
+#include "gonio/sim/devsim/scpi_sim.hpp"
+#include "gonio/drivers/transport/tcp.hpp"
 #include "gonio/proto/error.hpp"
 
 using gonio::Errc;

@@ -15,11 +15,11 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "gonio/drivers/registry.hpp"
-#include "gonio/drivers/scpi.hpp"
-#include "gonio/drivers/scpi_sim.hpp"
-#include "gonio/drivers/serial.hpp"
-#include "gonio/drivers/transport_tcp.hpp"
+#include "gonio/registry/registry.hpp"
+#include "gonio/drivers/scpi/scpi.hpp"
+#include "gonio/sim/devsim/scpi_sim.hpp"
+#include "gonio/drivers/transport/serial.hpp"
+#include "gonio/drivers/transport/tcp.hpp"
 #include "gonio/proto/error.hpp"
 
 extern char** environ;

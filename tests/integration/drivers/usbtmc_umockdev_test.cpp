@@ -33,8 +33,8 @@
 #include <gtest/gtest.h>
 #include <umockdev.h>
 
-#include "gonio/drivers/scpi.hpp"
-#include "gonio/drivers/usbtmc.hpp"
+#include "gonio/drivers/scpi/scpi.hpp"
+#include "gonio/drivers/usbtmc/usbtmc.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace tmc = gonio::drivers::usbtmc;

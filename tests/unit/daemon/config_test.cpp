@@ -37,6 +37,8 @@ synchronous = "normal"
 move_timeout_s = 2
 [instrument.limits]
 incidence = [0, 70]
+rotation = [-180, 270]
+tilt = [-5, 5]
 min_separation = 4
 [instrument.motion]
 driver = "mock"
@@ -67,6 +69,9 @@ backoff_s = 0.05
   EXPECT_FALSE(c.synchronous_full);
   EXPECT_EQ(c.move_timeout, std::chrono::milliseconds(2000));
   EXPECT_DOUBLE_EQ(c.limits.incidence_max, 70);
+  EXPECT_DOUBLE_EQ(c.limits.receive_min, -85);  // default
+  EXPECT_EQ(c.limits.of(drivers::Axis::rotation), (drivers::SoftLimits{-180, 270}));
+  EXPECT_EQ(c.limits.of(drivers::Axis::tilt), (drivers::SoftLimits{-5, 5}));
   EXPECT_DOUBLE_EQ(c.limits.min_separation.value(), 4);
   EXPECT_EQ(c.motion["time_scale"], 0.5);
   EXPECT_EQ(c.sustained_m, 2);
@@ -85,6 +90,8 @@ TEST(Config, RejectsUnknownKeysAndBadValuesNamingThem) {
   EXPECT_EQ(field_of("[divergence]\nz_threshold = 0\n"), "divergence.z_threshold");
   EXPECT_EQ(field_of("[divergence]\nsustained_m = 6\nsustained_n = 5\n"), "divergence.sustained_m");
   EXPECT_EQ(field_of("[instrument.limits]\nreceive = [10, -10]\n"), "instrument.limits.receive[1]");
+  EXPECT_EQ(field_of("[instrument.limits]\ntilt = [-400, 0]\n"), "instrument.limits.tilt[0]");
+  EXPECT_EQ(field_of("[instrument.limits]\nmin_separation = 180\n"), "instrument.limits.min_separation");
   EXPECT_EQ(field_of("[instrument]\nmotion = { port = 3 }\n"), "instrument.motion");
   EXPECT_EQ(field_of("[[auth.token]]\nname = \"x\"\nrole = \"root\"\nsha256 = \"\"\n"), "auth.token[0].role");
   EXPECT_EQ(field_of("[[auth.token]]\nname = \"x\"\nrole = \"admin\"\nsha256 = \"abc\"\n"),
@@ -114,6 +121,38 @@ TEST(Config, ExamplesParseAndTheirDriverTablesAreValid) {
   table.erase("driver");
   const auto mc = drivers::modbus::MotionConfig::from_json(table);
   EXPECT_EQ(mc.axes.size(), 2u);
+  // Its soft limits are in the one limits table.
+  EXPECT_EQ(hw.limits.of(drivers::Axis::incidence), (drivers::SoftLimits{0, 80}));
+  EXPECT_DOUBLE_EQ(hw.limits.min_separation.value(), 8);
+}
+
+TEST(Config, OldModbusLimitKeysAreRefusedWithWhereTheyLiveNow) {
+  // A config written for the per-axis driver limits still parses as TOML; the driver table
+  // is refused with the key and the new home of soft limits.
+  const auto c = Config::parse(R"(
+[instrument.motion]
+driver = "modbus"
+[instrument.motion.links.bus]
+type = "rtu"
+device = "/dev/null"
+[instrument.motion.axes.incidence]
+unit = 1
+steps_per_degree = 1000
+min_deg = 0
+max_deg = 80
+[instrument.photometer]
+driver = "mock"
+)");
+  auto table = c.motion;
+  table.erase("driver");
+  try {
+    drivers::modbus::MotionConfig::from_json(table);
+    FAIL() << "per-axis limits were accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::invalid_argument);
+    EXPECT_EQ(e.field(), "axes.incidence.min_deg");
+    EXPECT_NE(std::string(e.what()).find("[instrument.limits]"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Config, MockDefaultsUseTheDemoSample) {

@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "gonio/drivers/collision.hpp"
+#include "gonio/drivers/motion/collision.hpp"
 #include "gonio/proto/error.hpp"
 
 using gonio::Errc;

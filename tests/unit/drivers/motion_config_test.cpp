@@ -23,9 +23,8 @@ json base() {
         {"net", {{"type", "tcp"}, {"host", "192.0.2.10"}, {"port", 502}}}}},
       {"response_timeout_ms", 150},
       {"reconnect", {{"initial_ms", 20}, {"max_ms", 500}}},
-      {"min_separation_deg", 12},
       {"axes",
-       {{"receive", {{"link", "bus"}, {"unit", 2}, {"steps_per_degree", 1000}, {"min_deg", -85}, {"max_deg", 85}}},
+       {{"receive", {{"link", "bus"}, {"unit", 2}, {"steps_per_degree", 1000}}},
         {"incidence",
          {{"link", "bus"}, {"unit", 1}, {"steps_per_degree", -500}, {"zero_deg", 2}, {"speed_deg_s", 5}}},
         {"tilt", {{"link", "net"}, {"unit", 1}, {"steps_per_degree", 100},
@@ -53,12 +52,10 @@ TEST(MotionConfig, ReadsEveryPart) {
   EXPECT_EQ(c.axes[0].scale.steps_per_degree, -500);
   EXPECT_EQ(c.axes[0].scale.zero_deg, 2);
   EXPECT_EQ(c.axes[0].speed_deg_s, 5);
-  EXPECT_EQ(c.axes[1].limits.min_deg, -85);
   EXPECT_EQ(c.axes[2].map.word_order, mb::WordOrder::low_first);
   EXPECT_EQ(c.axes[1].map, mb::RegisterMap::preset("az"));
   EXPECT_EQ(c.timing.response_timeout.count(), 150);
   EXPECT_EQ(c.timing.backoff_initial.count(), 20);
-  EXPECT_EQ(c.min_separation_deg, 12);
   const auto& bus = c.links[0].name == "bus" ? c.links[0] : c.links[1];
   EXPECT_EQ(bus.kind, mb::LinkConfig::Kind::rtu);
   EXPECT_EQ(bus.parity, 'E');
@@ -104,7 +101,6 @@ TEST(MotionConfig, ChecksRangesAndNamesThem) {
       {"/axes/receive/unit", 0, "axes.receive.unit"},
       {"/axes/receive/unit", 248, "axes.receive.unit"},
       {"/axes/receive/steps_per_degree", 0, "axes.receive.steps_per_degree"},
-      {"/axes/receive/max_deg", -90, "axes.receive.max_deg"},
       {"/axes/receive/speed_deg_s", 0, "axes.receive.speed_deg_s"},
       {"/axes/receive/current_percent", 101, "axes.receive.current_percent"},
       {"/axes/receive/link", "nowhere", "axes.receive.link"},
@@ -116,7 +112,6 @@ TEST(MotionConfig, ChecksRangesAndNamesThem) {
       {"/response_timeout_ms", 0, "response_timeout_ms"},
       {"/retries", 11, "retries"},
       {"/reconnect/max_ms", 10, "reconnect.max_ms"},
-      {"/min_separation_deg", 180, "min_separation_deg"},
   };
   for (const auto& c : cases) {
     auto j = base();
@@ -125,12 +120,31 @@ TEST(MotionConfig, ChecksRangesAndNamesThem) {
     EXPECT_NE(e.code(), Errc::internal) << c.pointer;
     EXPECT_EQ(e.field(), c.field) << c.pointer << ": " << e.what();
   }
-  // At 1e7 steps/° a limit of 300° is beyond int32 steps: the limit names it.
-  auto j = base();
-  j["axes"]["receive"]["steps_per_degree"] = 1e7;
-  EXPECT_NO_THROW(mb::MotionConfig::from_json(j));  // ±85° still fits
-  j["axes"]["receive"]["max_deg"] = 300;
-  EXPECT_EQ(error_of(j).field(), "axes.receive.max_deg");
+}
+
+TEST(MotionConfig, OldLimitKeysSayWhereSoftLimitsLiveNow) {
+  struct Case {
+    const char* pointer;
+    json value;
+    const char* field;
+    const char* instead;
+  };
+  const Case cases[] = {
+      {"/axes/receive/min_deg", -85, "axes.receive.min_deg", "receive = [MIN, MAX]"},
+      {"/axes/incidence/max_deg", 80, "axes.incidence.max_deg", "incidence = [MIN, MAX]"},
+      {"/min_separation_deg", 8, "min_separation_deg", "(min_separation)"},
+  };
+  for (const auto& c : cases) {
+    auto j = base();
+    j[json::json_pointer(c.pointer)] = c.value;
+    const Error e = error_of(j);
+    EXPECT_EQ(e.code(), Errc::invalid_argument) << c.pointer;
+    EXPECT_EQ(e.field(), c.field) << c.pointer;
+    const std::string what = e.what();
+    EXPECT_NE(what.find(c.field), std::string::npos) << what;
+    EXPECT_NE(what.find("soft limits now live in [instrument.limits]"), std::string::npos) << what;
+    EXPECT_NE(what.find(c.instead), std::string::npos) << what;
+  }
 }
 
 TEST(MotionConfig, RejectsStructuralMistakes) {

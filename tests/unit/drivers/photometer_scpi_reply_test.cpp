@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "gonio/drivers/scpi.hpp"
+#include "gonio/drivers/scpi/scpi.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace scpi = gonio::drivers::scpi;

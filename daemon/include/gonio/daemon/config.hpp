@@ -17,6 +17,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "gonio/drivers/motion/limits.hpp"
+
 namespace gonio::daemon {
 
 using std::chrono::milliseconds;
@@ -78,11 +80,10 @@ struct Config {
   milliseconds home_timeout{120000};
   milliseconds measure_timeout{30000};
   milliseconds settle{0};
-  struct Limits {
-    double incidence_min = 0, incidence_max = 85;
-    double receive_min = -85, receive_max = 85;
-    std::optional<double> min_separation;  // default: the profile's arms.min_separation_deg
-  } limits;
+  // [instrument.limits]: the one table of soft limits and arm clearance, handed to the
+  // driver registry, which guards the motion controller with it. An unset min_separation
+  // takes the motion driver's default (the mock: its profile's arms.min_separation_deg).
+  drivers::MotionLimits limits;
   bool auto_resume = false;
   milliseconds auto_resume_delay{30000};
   int max_auto_resumes = 3;

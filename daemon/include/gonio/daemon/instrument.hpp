@@ -49,9 +49,9 @@
 #include "gonio/daemon/plan_check.hpp"
 #include "gonio/daemon/store.hpp"
 #include "gonio/daemon/twin_service.hpp"
-#include "gonio/drivers/collision.hpp"
-#include "gonio/drivers/motion_controller.hpp"
-#include "gonio/drivers/photometer.hpp"
+#include "gonio/drivers/motion/collision.hpp"
+#include "gonio/drivers/motion/motion_controller.hpp"
+#include "gonio/drivers/photometer/photometer.hpp"
 
 namespace gonio::daemon {
 

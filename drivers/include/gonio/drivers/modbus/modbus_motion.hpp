@@ -13,17 +13,20 @@
 //     "reconnect": {"initial_ms": 50, "max_ms": 2000},
 //     "poll_interval_ms": 10,                      // status polling while waiting
 //     "settle_timeout_ms": 1000,                   // profile done -> IN-POS, else following error
-//     "min_separation_deg": 10,                    // arm collision guard (0: off)
 //     "axes": {
 //       "incidence": {"link": "bus", "unit": 1, "steps_per_degree": 1000, "zero_deg": 0,
-//                     "min_deg": -5, "max_deg": 90, "speed_deg_s": 10,
-//                     "accel_deg_s2": 50, "decel_deg_s2": 50, "current_percent": 100,
-//                     "in_position_deg": 0.01, "following_error_deg": 0.5,
+//                     "speed_deg_s": 10, "accel_deg_s2": 50, "decel_deg_s2": 50,
+//                     "current_percent": 100, "in_position_deg": 0.01, "following_error_deg": 0.5,
 //                     "register_map": {...}},      // optional per-axis override
 //       "receive": {...}, "rotation": {...}, "tilt": {...}
 //     }
 //   }
 // "link" may be omitted when there is exactly one link.
+//
+// Soft limits and the arms' minimum separation are not driver keys: the instrument's one
+// limits table ([instrument.limits], motion/limits.hpp) holds them and GuardedMotion
+// enforces them around this driver. The old keys (axes.*.min_deg, axes.*.max_deg,
+// min_separation_deg) are refused with Error(invalid_argument) saying so.
 #pragma once
 
 #include <chrono>
@@ -33,10 +36,9 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "gonio/drivers/collision.hpp"
 #include "gonio/drivers/modbus/link.hpp"
 #include "gonio/drivers/modbus/register_map.hpp"
-#include "gonio/drivers/motion_controller.hpp"
+#include "gonio/drivers/motion/motion_controller.hpp"
 
 namespace gonio::drivers {
 
@@ -47,7 +49,6 @@ struct AxisConfig {
   std::string link;
   int unit = 1;  // 1..247
   AxisScale scale;
-  SoftLimits limits;
   double speed_deg_s = 10;
   double accel_deg_s2 = 50;
   double decel_deg_s2 = 50;
@@ -63,7 +64,6 @@ struct MotionConfig {
   LinkTiming timing;
   std::chrono::milliseconds poll_interval{10};
   std::chrono::milliseconds settle_timeout{1000};
-  double min_separation_deg = 0;
 
   static MotionConfig from_json(const nlohmann::json& j);
 };

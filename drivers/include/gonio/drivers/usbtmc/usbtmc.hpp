@@ -29,7 +29,7 @@
 #include <string>
 #include <vector>
 
-#include "gonio/drivers/transport.hpp"
+#include "gonio/drivers/transport/transport.hpp"
 
 namespace gonio::drivers::usbtmc {
 

@@ -21,7 +21,7 @@
 #include <array>
 #include <optional>
 
-#include "gonio/drivers/motion_controller.hpp"
+#include "gonio/drivers/motion/motion_controller.hpp"
 
 namespace gonio::drivers {
 

@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "gonio/drivers/devsim/modbus_sim.hpp"
+#include "gonio/sim/devsim/modbus_sim.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace devsim = gonio::drivers::devsim;

@@ -1,5 +1,5 @@
 // Small helpers of the Photometer interface shared by every photometer driver.
-#include "gonio/drivers/photometer.hpp"
+#include "gonio/drivers/photometer/photometer.hpp"
 
 #include <fmt/format.h>
 

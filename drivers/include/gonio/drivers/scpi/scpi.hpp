@@ -24,8 +24,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "gonio/drivers/photometer.hpp"
-#include "gonio/drivers/transport.hpp"
+#include "gonio/drivers/photometer/photometer.hpp"
+#include "gonio/drivers/transport/transport.hpp"
 
 namespace gonio::drivers::scpi {
 

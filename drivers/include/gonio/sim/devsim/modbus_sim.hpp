@@ -1,5 +1,7 @@
 // An AZ-compatible Modbus motion controller simulator: a libmodbus server on TCP (a port
-// it binds) and on RTU (a pty it creates), one simulated axis per unit id.
+// it binds) and on RTU (a pty it creates), one simulated axis per unit id. Three layers:
+// SimAxis (the motion model), SimUnit (the registers of one unit over its axis) and
+// ModbusSim (the serving loop).
 //
 // Each unit holds the holding registers of its register map (preset `az`) and runs a
 // motion model: trapezoidal profile from the direct-data speed, acceleration and stop
@@ -41,6 +43,7 @@
 #include <iosfwd>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -114,6 +117,54 @@ class SimAxis {
   bool stop_ = false, free_ = false, home_end_ = false;
   std::uint32_t alarm_ = 0;
   int moves_ = 0;
+};
+
+// One simulated unit as its registers show it: the holding-register image of the map and
+// the SimAxis behind it. What a write does (the trigger starts a direct data operation,
+// the input command's levels and rising edges) and what a read shows (status word, alarm
+// code, feedback and command positions) live here, so that the register behaviour is
+// testable without a socket; ModbusSim only frames requests and answers them from this
+// image. No clock of its own: advance() is given the elapsed time.
+class SimUnit {
+ public:
+  SimUnit(SimAxisConfig config, modbus::RegisterMap map, bool instant);
+
+  int unit() const noexcept { return axis_.config().unit; }
+  const modbus::RegisterMap& map() const noexcept { return map_; }
+  const SimAxis& axis() const noexcept { return axis_; }
+
+  // The register image, addresses 0 .. size()-1 (covers every register of the map). The
+  // server lets libmodbus read and write it, then calls written().
+  std::span<std::uint16_t> registers() noexcept { return regs_; }
+  // Whether [first, first+count) touches a status or monitor register (a write there is
+  // refused with exception 02).
+  bool read_only(int first, int count) const noexcept;
+
+  // Integrates the motion over `seconds`, then refreshes the status and monitor registers.
+  void advance(double seconds);
+  // Status word, alarm code and positions from the axis.
+  void refresh();
+  // Acts on what a write of [first, first+count) into registers() changed — the trigger
+  // and the input command — then refreshes.
+  void written(int first, int count);
+  void raise_alarm(std::uint32_t code);
+
+  // Typed access to the image. read() refreshes first. write() stores the values and acts
+  // on them; it throws Error(invalid_argument) for a read-only register and
+  // Error(out_of_range) outside the image, and then changes nothing.
+  std::vector<std::uint16_t> read(int first, int count);
+  void write(int first, std::span<const std::uint16_t> values);
+
+ private:
+  void put32(std::uint16_t addr, std::uint32_t v);
+  std::int32_t get_i32(std::uint16_t addr) const;
+  void start_direct();
+  void check_range(int first, int count, const char* what) const;
+
+  modbus::RegisterMap map_;
+  SimAxis axis_;
+  std::vector<std::uint16_t> regs_;
+  std::uint16_t inputs_ = 0;  // last input command word, for rising edges
 };
 
 struct ModbusSimConfig {

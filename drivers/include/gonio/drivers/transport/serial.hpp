@@ -8,7 +8,7 @@
 
 #include <string>
 
-#include "gonio/drivers/transport.hpp"
+#include "gonio/drivers/transport/transport.hpp"
 
 namespace gonio::drivers {
 

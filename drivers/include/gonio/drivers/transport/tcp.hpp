@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <string>
 
-#include "gonio/drivers/transport.hpp"
+#include "gonio/drivers/transport/transport.hpp"
 
 namespace gonio::drivers {
 

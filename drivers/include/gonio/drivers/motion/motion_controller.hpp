@@ -8,8 +8,9 @@
 // A controller drives a subset of them (axes()); the others throw Error(unsupported).
 //
 // Moves are absolute and blocking: move() returns when the axis is in position at the
-// target, or throws. Soft limits and the arm collision guard (collision.hpp) are checked
-// before anything is sent to the device. Every call blocks for at most its timeout and
+// target, or throws. Drivers check no soft limits and no arm collision: GuardedMotion
+// (motion/guarded_motion.hpp), which wraps every controller an instrument opens, checks
+// them before a move reaches the driver. Every call blocks for at most its timeout and
 // fails with gonio::Error:
 //   timeout          the device did not answer, or the motion did not finish, in time
 //   disconnected     the link dropped and could not be re-established before the deadline

@@ -5,8 +5,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "gonio/drivers/mock.hpp"
-#include "gonio/drivers/registry.hpp"
+#include "gonio/sim/mock/mock.hpp"
+#include "gonio/registry/registry.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/twin.hpp"
 

@@ -61,8 +61,8 @@ class Transport {
 using TransportPtr = std::unique_ptr<Transport>;
 
 // Reads the keys a transport of `type` ("serial", "tcp", "usbtmc") owns in `r` (see
-// serial.hpp, transport_tcp.hpp, usbtmc.hpp) and returns what opens it, so that the caller
-// can reject unknown keys (r.finish()) before any device is touched.
+// transport/serial.hpp, transport/tcp.hpp, usbtmc/usbtmc.hpp) and returns what opens it, so
+// that the caller can reject unknown keys (r.finish()) before any device is touched.
 std::function<TransportPtr()> read_transport(std::string_view type, json_util::ObjectReader& r);
 
 }  // namespace gonio::drivers

@@ -1,5 +1,6 @@
 // The mock instrument — a virtual lab behind a MotionController and a Photometer, whose
-// readings come from the twin (DESIGN §4).
+// readings come from the twin (DESIGN §4). Like every motion driver it checks no limits:
+// the registry wraps it in GuardedMotion (motion/guarded_motion.hpp).
 //
 // The lab holds a hidden "true" sample (a BSDF spec that may differ from the catalog's),
 // an instrument profile (default gcms4) and imperfections: arm offsets (the arms stand
@@ -36,9 +37,9 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "gonio/drivers/motion_controller.hpp"
-#include "gonio/drivers/photometer.hpp"
-#include "gonio/drivers/scpi_sim.hpp"
+#include "gonio/drivers/motion/motion_controller.hpp"
+#include "gonio/drivers/photometer/photometer.hpp"
+#include "gonio/sim/devsim/scpi_sim.hpp"
 
 namespace gonio::twin {
 class Twin;
@@ -60,6 +61,10 @@ MockInstrument make_mock(const nlohmann::json& config);
 // Registry entries: each builds its own lab.
 std::unique_ptr<MotionController> make_mock_motion(const nlohmann::json& config);
 std::unique_ptr<Photometer> make_mock_photometer(const nlohmann::json& config);
+// The arms' clearance of the lab's profile (profile.arms.min_separation_deg): the
+// instrument's minimum separation when its limits table leaves it unset. Throws for a bad
+// config, as make_mock does.
+double default_min_separation(const nlohmann::json& config);
 
 // β of the twin at a geometry, cached per geometry: the physics of the simulators.
 devsim::BetaSource twin_beta_source(std::shared_ptr<const twin::Twin> twin,

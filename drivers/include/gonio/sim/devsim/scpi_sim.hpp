@@ -22,7 +22,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "gonio/drivers/photometer.hpp"
+#include "gonio/drivers/photometer/photometer.hpp"
 #include "gonio/proto/geometry.hpp"
 #include "gonio/proto/spectrum.hpp"
 

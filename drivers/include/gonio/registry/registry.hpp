@@ -1,0 +1,74 @@
+// The driver registry — a static table of every driver by name with its capabilities
+// (DESIGN §7.4: the mock is a driver like any other).
+//
+//   name          motion  photometer  what
+//   modbus        yes     -           Modbus RTU/TCP motion controllers (modbus/modbus_motion.hpp)
+//   mock          yes     yes         the twin-backed virtual lab (sim/mock/mock.hpp)
+//   scpi-serial   -       yes         SCPI photometer on a serial line (transport/serial.hpp)
+//   scpi-tcp      -       yes         SCPI photometer on a raw TCP socket (transport/tcp.hpp)
+//   scpi-usbtmc   -       yes         SCPI photometer over USBTMC via libusb (usbtmc/usbtmc.hpp)
+//
+// Instrument config (JSON, strict): {"motion": {"driver": NAME, ...driver keys},
+// "photometer": {"driver": NAME, ...driver keys}}. When both sides are "mock", the lab is
+// configured on the motion side and the photometer side must be just {"driver": "mock"}:
+// both then share one virtual lab (the photometer sees where the arms are).
+//
+// Motion safety is defined once: open_instrument wraps the motion controller in a
+// GuardedMotion whose MotionGuard comes from the instrument's one limits table
+// (MotionLimits, goniod's [instrument.limits]). Drivers hold no limits of their own. An
+// unset min_separation takes the motion driver's default: the mock lab's profile clearance
+// for "mock", kDefaultMinSeparationDeg (motion/limits.hpp) for every other driver.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <string_view>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "gonio/drivers/motion/guarded_motion.hpp"
+#include "gonio/drivers/motion/limits.hpp"
+#include "gonio/drivers/motion/motion_controller.hpp"
+#include "gonio/drivers/photometer/photometer.hpp"
+
+namespace gonio::drivers {
+
+struct DriverInfo {
+  std::string_view name;
+  std::string_view description;
+  bool motion = false;         // provides a MotionController
+  bool photometer = false;     // provides a Photometer
+  bool needs_hardware = true;  // false: runs without devices (mock)
+  std::unique_ptr<MotionController> (*make_motion)(const nlohmann::json& config) = nullptr;
+  std::unique_ptr<Photometer> (*make_photometer)(const nlohmann::json& config) = nullptr;
+  // The minimum arm separation when the limits table sets none (nullptr:
+  // kDefaultMinSeparationDeg).
+  double (*default_min_separation)(const nlohmann::json& config) = nullptr;
+};
+
+std::span<const DriverInfo> drivers() noexcept;
+// Throws Error(not_found) listing the known names.
+const DriverInfo& find_driver(std::string_view name);
+
+// `config` holds the driver's own keys (no "driver" key). Throws Error(unsupported) when
+// the driver has no such side. The controller is the bare driver, unguarded: instruments
+// come from open_instrument.
+std::unique_ptr<MotionController> make_motion(std::string_view driver, const nlohmann::json& config);
+std::unique_ptr<Photometer> make_photometer(std::string_view driver, const nlohmann::json& config);
+
+// The guard of an instrument whose motion side is `motion` ({"driver": NAME, ...}): the
+// limits of `limits`, its min_separation or else the driver's default. Errors name the
+// field ("motion.profile", "min_separation", ...).
+MotionGuard motion_guard(const MotionLimits& limits, const nlohmann::json& motion);
+
+struct Instrument {
+  std::unique_ptr<GuardedMotion> motion;
+  std::unique_ptr<Photometer> photometer;
+};
+// From the instrument config above, the motion controller wrapped in a GuardedMotion with
+// `guard`; errors name the field ("motion.driver", ...).
+Instrument open_instrument(const nlohmann::json& config, const MotionGuard& guard);
+// The same, with the guard of `limits` (motion_guard).
+Instrument open_instrument(const nlohmann::json& config, const MotionLimits& limits = {});
+
+}  // namespace gonio::drivers
