@@ -138,8 +138,7 @@ bool Auth::ensure_admin_token(const std::filesystem::path& file) {
 std::string Auth::create(const std::string& name, Role role) {
   for (const auto& e : configured_)
     if (e.name == name)
-      throw Error(Errc::invalid_state,
-                  fmt::format("token '{}' is defined in the config file", name), "name");
+      throw Error::wrong_state("name", fmt::format("token '{}' is defined in the config file", name));
   const std::string token = generate_token();
   store_.put_token(TokenEntry{name, role, sha256_hex(token)});
   reload();

@@ -295,11 +295,8 @@ void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
                                       name),
                           Errc::unauthorized));
     else
-      finish(std::nullopt,
-             error_object(code::forbidden,
-                          fmt::format("{} needs the {} role; '{}' has {}", name,
-                                      role_name(method.role), who.name, role_name(who.role)),
-                          Errc::forbidden));
+      finish(std::nullopt, error_object(Error::forbidden(name, role_name(method.role), who.name,
+                                                         role_name(who.role))));
     return;
   }
   auto run = [&method, session, who = std::move(who), name, params = std::move(params),

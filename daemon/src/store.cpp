@@ -394,8 +394,7 @@ Sample Store::create_sample(const SampleSpec& spec, const std::string& actor) {
     Stmt s(*writer_, "SELECT 1 FROM samples WHERE name = ?");
     s.bind(1, spec.name);
     if (s.step())
-      throw Error(Errc::invalid_state, fmt::format("name: a sample named '{}' exists", spec.name),
-                  "name");
+      throw Error::exists("name", fmt::format("a sample named '{}'", spec.name));
   }
   Sample out;
   out.spec = spec;
@@ -557,7 +556,7 @@ void Store::set_scan_state(std::int64_t id, ScanState state, const std::string& 
   {
     Stmt s(*writer_, "SELECT state FROM scans WHERE id = ?");
     s.bind(1, id);
-    if (!s.step()) throw Error(Errc::not_found, fmt::format("scan {} does not exist", id), "scan");
+    if (!s.step()) throw Error::not_found("scan", fmt::format("scan {}", id));
     old = s.text(0);
   }
   const auto now = utc::now();
@@ -582,11 +581,9 @@ void Store::reorder(std::int64_t id, std::size_t position, const std::string& ac
   auto ids = waiting_ids(*writer_);
   const auto it = std::find(ids.begin(), ids.end(), id);
   if (it == ids.end())
-    throw Error(Errc::invalid_state,
-                fmt::format("scan {} is not waiting in the queue (only queued, paused or "
-                            "interrupted scans can be moved)",
-                            id),
-                "scan");
+    throw Error::wrong_state("scan", fmt::format("scan {} is not waiting in the queue (only "
+                                                 "queued, paused or interrupted scans can be moved)",
+                                                 id));
   ids.erase(it);
   position = std::min(position, ids.size());
   ids.insert(ids.begin() + static_cast<std::ptrdiff_t>(position), id);
@@ -635,9 +632,7 @@ void Store::insert_point(const PointRecord& p, const std::string& data) {
         .run();
   } catch (const Error& e) {
     if (e.code() == Errc::invalid_state)
-      throw Error(Errc::invalid_state,
-                  fmt::format("point {} of scan {} is already stored", p.index, p.scan_id),
-                  "index");
+      throw Error::exists("index", fmt::format("point {} of scan {}", p.index, p.scan_id));
     throw;
   }
   Stmt(*writer_, "UPDATE scans SET points_done = points_done + 1, "
@@ -765,7 +760,7 @@ Alert Store::ack_alert(std::int64_t id, const std::string& actor) {
       Stmt s(*writer_, "SELECT acknowledged FROM alerts WHERE id = ?");
       s.bind(1, id);
       if (!s.step())
-        throw Error(Errc::not_found, fmt::format("alert {} does not exist", id), "alert");
+        throw Error::not_found("alert", fmt::format("alert {}", id));
       if (s.i64(0) != 0) {
         t.commit();
         return *alert(id);

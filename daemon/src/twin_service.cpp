@@ -179,7 +179,7 @@ twin::Prediction TwinService::Batch::wait(std::size_t i) {
   if (st.submitted < st.base) st.submitted = st.base;
   submit_upto(i + 1 + window_);
   st.cv.wait(lock, [&] { return st.slots.front().done || st.cancelled.load(); });
-  if (!st.slots.front().done) throw Error(Errc::invalid_state, "prediction cancelled");
+  if (!st.slots.front().done) throw Error::wrong_state("", "prediction cancelled");
   if (st.slots.front().error) std::rethrow_exception(st.slots.front().error);
   return *st.slots.front().value;
 }

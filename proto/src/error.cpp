@@ -1,3 +1,4 @@
+// gonio::Error: the Errc ids and the message factories.
 #include "gonio/proto/error.hpp"
 
 #include <array>
@@ -60,9 +61,38 @@ Error Error::out_of_range(std::string field, double value, double lo, double hi,
   return Error(Errc::out_of_range, std::move(msg), std::move(field));
 }
 
+namespace {
+
+// "<field>: <text>", or the text alone when there is no field.
+std::string with_field(const std::string& field, std::string_view text) {
+  return field.empty() ? std::string(text) : fmt::format("{}: {}", field, text);
+}
+
+}  // namespace
+
 Error Error::invalid(std::string field, std::string message) {
-  auto msg = field.empty() ? message : fmt::format("{}: {}", field, message);
+  auto msg = with_field(field, message);
   return Error(Errc::invalid_argument, std::move(msg), std::move(field));
+}
+
+Error Error::not_found(std::string field, std::string_view what) {
+  auto msg = with_field(field, fmt::format("{} does not exist", what));
+  return Error(Errc::not_found, std::move(msg), std::move(field));
+}
+
+Error Error::exists(std::string field, std::string_view what) {
+  auto msg = with_field(field, fmt::format("{} already exists", what));
+  return Error(Errc::invalid_state, std::move(msg), std::move(field));
+}
+
+Error Error::wrong_state(std::string field, std::string_view why) {
+  auto msg = with_field(field, why);
+  return Error(Errc::invalid_state, std::move(msg), std::move(field));
+}
+
+Error Error::forbidden(std::string_view action, std::string_view needed, std::string_view who,
+                       std::string_view has) {
+  return Error(Errc::forbidden, fmt::format("{} needs the {} role; '{}' has {}", action, needed, who, has));
 }
 
 }  // namespace gonio

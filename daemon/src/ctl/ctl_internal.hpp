@@ -13,6 +13,10 @@
 
 #include "gonio/daemon/client.hpp"
 
+namespace CLI {
+class App;
+}
+
 namespace gonio::daemon::ctl {
 
 struct Options {
@@ -39,6 +43,30 @@ class Session {
 };
 
 std::string default_state_dir();
+
+// What the command groups share while the command line is parsed: the callback of the
+// chosen subcommand sets `action`, which gonioctl_main then runs with a Session that
+// connects on first use (so local commands such as `token hash` never connect).
+struct Context {
+  std::function<int(Session&)> action;
+};
+
+// One per command group, each in its own file (ctl/cmd_<group>.cpp), in the order of
+// gonioctl's help.
+void add_system_commands(CLI::App& app, Context& ctx);      // info, discover, call
+void add_instrument_commands(CLI::App& app, Context& ctx);  // instrument ...
+void add_sample_commands(CLI::App& app, Context& ctx);      // sample ...
+void add_scan_commands(CLI::App& app, Context& ctx);        // scan ...
+void add_queue_commands(CLI::App& app, Context& ctx);       // queue ...
+void add_alert_commands(CLI::App& app, Context& ctx);       // alert ...
+void add_twin_commands(CLI::App& app, Context& ctx);        // twin ...
+void add_token_commands(CLI::App& app, Context& ctx);       // token ...
+void add_demo_commands(CLI::App& app, Context& ctx);        // demo
+
+// A sample given on the command line: all digits is an id, anything else a name.
+nlohmann::json sample_ref(const std::string& text);
+// The table of scans that `scan list` and `queue status` print.
+void scans_table(const nlohmann::json& list);
 
 // Prints a result: JSON (pretty) with --json, else `human`.
 void print(const Options& o, const nlohmann::json& result, const std::function<void()>& human);

@@ -1,12 +1,6 @@
 // JSON-RPC 2.0 semantics of the dispatcher (independent of any transport).
-#include <unistd.h>
-
-#include <filesystem>
-
-#include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/methods.hpp"
 #include "gonio/daemon/rpc.hpp"
 
 namespace gonio::daemon::rpc {
@@ -149,44 +143,6 @@ TEST(Dispatcher, BlockingMethodsRunOnTheExecutor) {
   const auto r = json::parse(out);
   EXPECT_EQ(r[0]["id"], 1);
   EXPECT_EQ(r[1]["id"], 2);
-}
-
-TEST(OpenRpc, DocumentsExactlyTheRegisteredMethods) {
-  const auto& doc = openrpc_document();
-  EXPECT_EQ(doc["openrpc"], "1.2.6");
-  std::set<std::string> documented;
-  for (const auto& m : doc["methods"]) {
-    documented.insert(m["name"].get<std::string>());
-    EXPECT_TRUE(m.contains("result")) << m["name"];
-    EXPECT_TRUE(m.contains("params")) << m["name"];
-  }
-  // What goniod registers: the real services, not started (no thread, no device opened).
-  namespace fs = std::filesystem;
-  const auto dir = fs::temp_directory_path() / fmt::format("gonio-openrpc-test-{}", ::getpid());
-  fs::create_directories(dir);
-  {
-    Config config = Config::mock_defaults();
-    config.twin_threads = 1;
-    Store store(dir / "goniod.db");
-    Auth auth({}, store);
-    TwinService twin(config, twin::InstrumentProfile::preset("gcms4"));
-    Hub hub;
-    AlertService alerts(store, hub);
-    Instrument instrument(config, store, twin, alerts, hub);
-    Dispatcher d(nullptr);
-    Services services{config, dir, store, auth, hub, twin, alerts, instrument,
-                      &d, std::chrono::steady_clock::now(), utc::now(), nullptr};
-    register_methods(d, services);
-    const auto names = d.names();
-    EXPECT_EQ(documented, std::set<std::string>(names.begin(), names.end()));
-  }
-  fs::remove_all(dir);
-  std::set<int> codes;
-  for (const auto& e : doc["x-error-codes"]) codes.insert(e["code"].get<int>());
-  for (int c : {-32700, -32600, -32601, -32602, -32603, code::unauthorized, code::forbidden, code::not_found,
-                code::invalid_state, code::instrument_busy, code::instrument_fault, code::plan_rejected,
-                code::limit_violation, code::unsupported, code::io_error, code::overloaded})
-    EXPECT_TRUE(codes.contains(c)) << c;
 }
 
 }  // namespace

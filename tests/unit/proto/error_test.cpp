@@ -1,3 +1,4 @@
+// gonio::Error: stable ids and numbers, and the one message format of each factory.
 #include "gonio/proto/error.hpp"
 
 #include <gtest/gtest.h>
@@ -22,6 +23,44 @@ TEST(Error, OutOfRangeNamesFieldValueAndRange) {
   EXPECT_EQ(e.code(), Errc::out_of_range);
   EXPECT_EQ(e.field(), "geometry.theta_i");
   EXPECT_STREQ(e.what(), "geometry.theta_i = 95° is outside the allowed range [0, 89.9]°");
+}
+
+TEST(Error, InvalidPrefixesTheField) {
+  const auto e = Error::invalid("format", "'xml' is not an export format");
+  EXPECT_EQ(e.code(), Errc::invalid_argument);
+  EXPECT_EQ(e.field(), "format");
+  EXPECT_STREQ(e.what(), "format: 'xml' is not an export format");
+  EXPECT_STREQ(Error::invalid("", "no field").what(), "no field");
+}
+
+TEST(Error, NotFoundHasOneFormat) {
+  const auto e = Error::not_found("scan", "scan 7");
+  EXPECT_EQ(e.code(), Errc::not_found);
+  EXPECT_EQ(e.field(), "scan");
+  EXPECT_STREQ(e.what(), "scan: scan 7 does not exist");
+  const auto n = Error::not_found("plan.sample", "sample 'tile'");
+  EXPECT_EQ(n.field(), "plan.sample");
+  EXPECT_STREQ(n.what(), "plan.sample: sample 'tile' does not exist");
+  EXPECT_STREQ(Error::not_found("", "preset 'x'").what(), "preset 'x' does not exist");
+}
+
+TEST(Error, ExistsAndWrongStateAreInvalidState) {
+  const auto e = Error::exists("name", "a sample named 'tile'");
+  EXPECT_EQ(e.code(), Errc::invalid_state);
+  EXPECT_EQ(e.field(), "name");
+  EXPECT_STREQ(e.what(), "name: a sample named 'tile' already exists");
+  const auto w = Error::wrong_state("scan", "scan 3 is completed; only paused scans can be resumed");
+  EXPECT_EQ(w.code(), Errc::invalid_state);
+  EXPECT_EQ(w.field(), "scan");
+  EXPECT_STREQ(w.what(), "scan: scan 3 is completed; only paused scans can be resumed");
+  EXPECT_STREQ(Error::wrong_state("", "goniod is stopping").what(), "goniod is stopping");
+}
+
+TEST(Error, ForbiddenNamesTheRoles) {
+  const auto e = Error::forbidden("scan.submit", "technician", "kiosk", "viewer");
+  EXPECT_EQ(e.code(), Errc::forbidden);
+  EXPECT_EQ(e.field(), "");
+  EXPECT_STREQ(e.what(), "scan.submit needs the technician role; 'kiosk' has viewer");
 }
 
 }  // namespace

@@ -1,4 +1,5 @@
-// The JSON-RPC methods of goniod (documented in proto/openrpc.json and daemon/README.md).
+// The JSON-RPC methods of goniod (documented in proto/openrpc.json and daemon/README.md; each
+// method's role and blocking are in gonio/daemon/method_table.hpp).
 #pragma once
 
 #include <chrono>

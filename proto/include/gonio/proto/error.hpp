@@ -53,7 +53,18 @@ class Error : public std::runtime_error {
   // "<field> = <value> is outside [lo, hi]<unit>"
   static Error out_of_range(std::string field, double value, double lo, double hi,
                             std::string_view unit = {});
+  // "<field>: <message>" (invalid_argument)
   static Error invalid(std::string field, std::string message);
+  // "<field>: <what> does not exist" (not_found), e.g. not_found("scan", "scan 7").
+  static Error not_found(std::string field, std::string_view what);
+  // "<field>: <what> already exists" (invalid_state), e.g. exists("name", "a sample named 'tile'").
+  static Error exists(std::string field, std::string_view what);
+  // "<field>: <why>" (invalid_state): the request is valid but not now, e.g.
+  // wrong_state("scan", "scan 7 is completed; only paused scans can be resumed").
+  static Error wrong_state(std::string field, std::string_view why);
+  // "<action> needs the <needed> role; '<who>' has <has>" (forbidden).
+  static Error forbidden(std::string_view action, std::string_view needed, std::string_view who,
+                         std::string_view has);
 
  private:
   Errc code_;

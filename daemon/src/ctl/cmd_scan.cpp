@@ -1,0 +1,198 @@
+// gonioctl scan: submit, get, list, pause, resume, cancel, points, export, watch.
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include "ctl/ctl_internal.hpp"
+#include "gonio/daemon/ctl.hpp"
+#include "gonio/proto/error.hpp"
+
+namespace gonio::daemon::ctl {
+
+using nlohmann::json;
+
+namespace {
+
+void points_table(const json& points) {
+  Table t({"index", "θi", "θr", "λ(nm)", "measured", "±u", "predicted", "±se", "max|z|", "ΔE00", "flags"});
+  for (const auto& p : points) {
+    const auto& m = p["measured"];
+    const auto& wl = m["wavelengths_nm"];
+    // The channel nearest 550 nm stands for the spectrum in a table.
+    std::size_t c = 0;
+    for (std::size_t i = 0; i < wl.size(); ++i)
+      if (std::abs(wl[i].get<double>() - 550) < std::abs(wl[c].get<double>() - 550)) c = i;
+    const auto& pr = p["predicted"];
+    std::string flags;
+    if (p["diverged"].get<bool>()) flags = "DIVERGED";
+    for (const auto& f : p["flags"]) {
+      const auto s = f.get<std::string>();
+      if (s == "reference_read") continue;
+      flags += (flags.empty() ? "" : ",") + s;
+    }
+    t.add({cell(p["index"]), cell(p["planned"]["theta_i"]), cell(p["planned"]["theta_r"]), cell(wl[c]),
+           cell(m["values"][c]), cell(m["std_uncertainty"][c]),
+           pr.is_null() ? "-" : cell(pr["values"][c]), pr.is_null() ? "-" : cell(pr["std_uncertainty"][c]),
+           p["z_max"].is_null() ? "-" : fmt::format("{:.2f}", p["z_max"].get<double>()),
+           p["delta_e00"].is_null() ? "-" : fmt::format("{:.2f}", p["delta_e00"].get<double>()), flags});
+  }
+  std::cout << t.render();
+}
+
+void scan_human(const json& s) {
+  std::cout << fmt::format("scan {}: {}{}\n", cell(s["id"]), cell(s["state"]),
+                           s["reason"].get<std::string>().empty() ? "" : " (" + cell(s["reason"]) + ")");
+  std::cout << fmt::format("  sample {}  points {}/{}  diverged {}  priority {}\n", cell(s["plan"]["sample"]),
+                           cell(s["points_done"]), cell(s["points_total"]), cell(s["points_diverged"]),
+                           cell(s["plan"]["priority"]));
+  std::cout << fmt::format("  wavelengths {}  repeats {}  reference {}\n", cell(s["plan"]["wavelengths"]),
+                           cell(s["plan"]["repeats"]), cell(s["plan"]["reference"]["mode"]));
+  std::cout << fmt::format("  submitted {} by {}  started {}  finished {}\n", cell(s["submitted_at"]),
+                           cell(s["submitted_by"]), cell(s["started_at"]), cell(s["finished_at"]));
+  if (!s["predicted"].get<bool>()) std::cout << "  no predictions: the sample has no reference BSDF\n";
+  if (s.contains("note")) std::cout << "  " << cell(s["note"]) << "\n";
+}
+
+struct ScanArgs {
+  std::string sample, name, wavelengths = "400:700:10", reference = "every_point", not_before, state;
+  std::vector<std::string> geometries, grids;
+  int repeats = 1, reference_interval = 10, priority = 0;
+  bool watch = false;
+  std::int64_t id = 0;
+  std::string reason;
+  std::size_t offset = 0, limit = 100;
+  std::string format = "csv", output;
+};
+
+}  // namespace
+
+void scans_table(const json& list) {
+  Table t({"id", "state", "sample", "points", "diverged", "priority", "submitted", "reason"});
+  for (const auto& s : list)
+    t.add({cell(s["id"]), cell(s["state"]), cell(s["plan"]["sample"]),
+           fmt::format("{}/{}", cell(s["points_done"]), cell(s["points_total"])),
+           cell(s["points_diverged"]), cell(s["plan"]["priority"]), cell(s["submitted_at"]),
+           cell(s["reason"])});
+  std::cout << t.render();
+}
+
+void add_scan_commands(CLI::App& app, Context& ctx) {
+  auto a = std::make_shared<ScanArgs>();
+  auto* scan = app.add_subcommand("scan", "scans: submit, follow, control, export");
+  scan->require_subcommand(1);
+  auto* submit = scan->add_subcommand("submit", "queue a scan");
+  submit->add_option("--sample", a->sample, "sample id or name")->required();
+  submit->add_option("--geometry", a->geometries, "45as15, 45/-30 or astm (repeatable)");
+  submit->add_option("--grid", a->grids, "grid, e.g. 'in=45;out=-80:80:2' (repeatable)");
+  submit->add_option("--wavelengths", a->wavelengths, "e.g. 400:700:10");
+  submit->add_option("--repeats", a->repeats);
+  submit->add_option("--reference", a->reference, "every_point, interval or start");
+  submit->add_option("--reference-interval", a->reference_interval);
+  submit->add_option("--priority", a->priority, "-100..100, higher runs first");
+  submit->add_option("--not-before", a->not_before, "UTC time, e.g. 2025-01-31T18:00:00Z");
+  submit->add_option("--name", a->name);
+  submit->add_flag("--watch", a->watch, "follow the scan until it ends");
+  submit->callback([&ctx, a] {
+    ctx.action = [a](Session& s) {
+      json p{{"sample", sample_ref(a->sample)},
+             {"wavelengths", a->wavelengths},
+             {"repeats", a->repeats},
+             {"reference", {{"mode", a->reference}, {"interval", a->reference_interval}}},
+             {"priority", a->priority},
+             {"name", a->name}};
+      if (!a->geometries.empty()) p["geometries"] = a->geometries;
+      if (!a->grids.empty()) p["grids"] = a->grids;
+      if (!a->not_before.empty()) p["not_before"] = a->not_before;
+      const auto r = s.call("scan.submit", p);
+      print(s.options(), r, [&] { scan_human(r); });
+      if (a->watch) return watch_scan(s, r["id"].get<std::int64_t>(), s.options().json);
+      return 0;
+    };
+  });
+  // A subcommand taking the scan id as its one positional argument.
+  const auto id_cmd = [scan, a](const std::string& name, const std::string& help) {
+    auto* c = scan->add_subcommand(name, help);
+    c->add_option("scan", a->id, "scan id")->required();
+    return c;
+  };
+  id_cmd("get", "one scan")->callback([&ctx, a] {
+    ctx.action = [a](Session& s) {
+      const auto r = s.call("scan.get", json{{"scan", a->id}});
+      print(s.options(), r, [&] { scan_human(r); });
+      return 0;
+    };
+  });
+  auto* slist = scan->add_subcommand("list", "recent scans");
+  slist->add_option("--state", a->state);
+  slist->add_option("--sample", a->sample);
+  slist->callback([&ctx, a] {
+    ctx.action = [a](Session& s) {
+      json p{{"limit", 100}};
+      if (!a->state.empty()) p["state"] = a->state;
+      if (!a->sample.empty()) p["sample"] = sample_ref(a->sample);
+      const auto r = s.call("scan.list", p);
+      print(s.options(), r, [&] { scans_table(r); });
+      return 0;
+    };
+  });
+  for (const char* verb : {"pause", "resume", "cancel"}) {
+    auto* c = id_cmd(verb, fmt::format("{} a scan", verb));
+    if (std::string(verb) != "resume") c->add_option("--reason", a->reason);
+    c->callback([&ctx, a, verb] {
+      ctx.action = [a, verb](Session& s) {
+        json p{{"scan", a->id}};
+        if (!a->reason.empty()) p["reason"] = a->reason;
+        const auto r = s.call(std::string("scan.") + verb, p);
+        print(s.options(), r, [&] { scan_human(r); });
+        return 0;
+      };
+    });
+  }
+  auto* pts = id_cmd("points", "measured and predicted points (paged)");
+  pts->add_option("--offset", a->offset);
+  pts->add_option("--limit", a->limit);
+  pts->callback([&ctx, a] {
+    ctx.action = [a](Session& s) {
+      const auto r = s.call("scan.points", json{{"scan", a->id}, {"offset", a->offset}, {"limit", a->limit}});
+      print(s.options(), r, [&] {
+        points_table(r["points"]);
+        if (!r["next_offset"].is_null())
+          std::cout << fmt::format("(more: --offset {})\n", cell(r["next_offset"]));
+      });
+      return 0;
+    };
+  });
+  auto* ex = id_cmd("export", "write the scan as csv, json, bsdf (IS-SA) or ssdd");
+  ex->add_option("--format", a->format)->check(CLI::IsMember({"csv", "json", "bsdf", "ssdd"}));
+  ex->add_option("--output,-o", a->output, "file (default: scan-ID.FORMAT; '-' for stdout)");
+  ex->callback([&ctx, a] {
+    ctx.action = [a](Session& s) {
+      const auto r = s.call("scan.export", json{{"scan", a->id}, {"format", a->format}});
+      const auto path = a->output.empty() ? r["filename"].get<std::string>() : a->output;
+      if (path == "-") {
+        std::cout << r["content"].get<std::string>();
+        return 0;
+      }
+      std::ofstream out(path, std::ios::binary | std::ios::trunc);
+      out << r["content"].get<std::string>();
+      if (!out) throw Error(Errc::io_error, fmt::format("cannot write {}", path));
+      if (s.options().json)
+        std::cout << json{{"file", path}, {"format", r["format"]}, {"points", r["points"]}}.dump(2) << "\n";
+      else
+        std::cout << fmt::format("wrote {} ({} points, {})\n", path, cell(r["points"]), cell(r["format"]));
+      return 0;
+    };
+  });
+  id_cmd("watch", "follow a scan live until it ends")->callback([&ctx, a] {
+    ctx.action = [a](Session& s) { return watch_scan(s, a->id, s.options().json); };
+  });
+}
+
+}  // namespace gonio::daemon::ctl

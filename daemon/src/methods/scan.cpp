@@ -1,0 +1,143 @@
+// The scan.* methods: submitting, reading, controlling, paging and exporting scans.
+#include <iterator>
+#include <string>
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "gonio/daemon/export.hpp"
+#include "methods/params.hpp"
+#include "methods/registrar.hpp"
+
+namespace gonio::daemon {
+
+using json_util::ObjectReader;
+using methods::actor;
+using methods::kMaxPage;
+using methods::read_count;
+using methods::read_id;
+using methods::read_offset;
+using methods::require_scan;
+using methods::resolve_sample;
+using methods::scan_summary;
+using nlohmann::json;
+
+namespace {
+
+// The most points one scan.export carries (larger scans are paged through scan.points).
+constexpr std::size_t kMaxExportPoints = 200000;
+
+enum class Control { pause, resume, cancel };
+
+// scan.pause, scan.resume and scan.cancel: {scan, reason?} -> the scan's summary.
+rpc::Handler control(Services& s, Control what) {
+  return [&s, what](rpc::Call& c) {
+    ObjectReader r(c.params, "");
+    const auto id = read_id(r, "scan");
+    const auto reason = r.optional<std::string>("reason", "");
+    r.finish();
+    if (reason.size() > 512) throw Error::invalid("reason", "has more than 512 characters");
+    const Scan sc = what == Control::pause    ? s.instrument.pause(id, actor(c), reason)
+                    : what == Control::resume ? s.instrument.resume(id, actor(c))
+                                              : s.instrument.cancel(id, actor(c), reason);
+    return scan_summary(sc);
+  };
+}
+
+}  // namespace
+
+void register_scan(MethodRegistrar& reg, Services& s) {
+  reg.add("scan.submit", [&s](rpc::Call& c) {
+    auto plan = c.params.get<ScanPlan>();
+    const auto sample = plan.sample_id ? resolve_sample(s.store, json(plan.sample_id), "sample")
+                                       : resolve_sample(s.store, json(plan.sample_name), "sample");
+    plan.sample_id = sample.id;
+    plan.sample_name.clear();
+    s.instrument.validate_plan(plan);
+    bool predicted = sample.spec.bsdf.has_value();
+    if (predicted) (void)s.twin.make(*sample.spec.bsdf, plan.wavelengths, "sample.bsdf");
+    const auto scan = s.store.insert_scan(plan, predicted, actor(c));
+    spdlog::info("scan {} submitted by {}: sample '{}', {} points, priority {}", scan.id, actor(c),
+                 sample.spec.name, scan.points_total, plan.priority);
+    s.hub.publish(Topic::state, "scan.state",
+                  json{{"scan", scan.id}, {"state", "queued"}, {"reason", ""}}, scan.id);
+    s.instrument.wake();
+    json out = scan_summary(scan);
+    if (!predicted) out["note"] = "the sample has no reference BSDF: measured without predictions";
+    return out;
+  });
+
+  reg.add("scan.get", [&s](rpc::Call& c) {
+    ObjectReader r(c.params, "");
+    const auto id = read_id(r, "scan");
+    const auto geometries = r.optional<bool>("geometries", false);
+    r.finish();
+    return to_json(require_scan(s.store, id), geometries);
+  });
+
+  reg.add("scan.list", [&s](rpc::Call& c) {
+    ObjectReader r(c.params, "");
+    ScanFilter f;
+    if (const auto* st = r.raw("state"); st && !st->is_null())
+      f.state = parse_scan_state(json_util::get_as<std::string>(*st, "state"), "state");
+    if (const auto* sm = r.raw("sample"); sm && !sm->is_null())
+      f.sample_id = resolve_sample(s.store, *sm, "sample").id;
+    f.offset = read_offset(r);
+    f.limit = read_count(r, "limit", 100, kMaxPage);
+    r.finish();
+    json out = json::array();
+    for (const auto& x : s.store.scans(f)) out.push_back(scan_summary(x));
+    return out;
+  });
+
+  reg.add("scan.pause", control(s, Control::pause));
+  reg.add("scan.resume", control(s, Control::resume));
+  reg.add("scan.cancel", control(s, Control::cancel));
+
+  reg.add("scan.points", [&s](rpc::Call& c) {
+    ObjectReader r(c.params, "");
+    const auto id = read_id(r, "scan");
+    const auto offset = read_offset(r);
+    const auto limit = read_count(r, "limit", 100, kMaxPage);
+    r.finish();
+    // Served from the stored JSON text as it is: no parse, no print (scan.points is what
+    // clients poll).
+    const auto progress = s.store.scan_progress(id);
+    if (!progress) throw Error::not_found("scan", fmt::format("scan {}", id));
+    const auto texts = s.store.point_json(id, offset, limit);
+    const auto next = offset + texts.size();
+    std::string out = fmt::format(R"({{"scan":{},"offset":{},"points_done":{},"points_total":{},"next_offset":{},"points":[)",
+                                  id, offset, progress->first, progress->second,
+                                  next < progress->first ? std::to_string(next) : "null");
+    for (std::size_t i = 0; i < texts.size(); ++i) {
+      if (i) out += ',';
+      out += texts[i];
+    }
+    out += "]}";
+    return rpc::RawJson{std::move(out)};
+  });
+
+  reg.add("scan.export", [&s](rpc::Call& c) {
+    ObjectReader r(c.params, "");
+    const auto id = read_id(r, "scan");
+    const auto format = r.optional<std::string>("format", "csv");
+    r.finish();
+    if (format != "csv" && format != "json" && format != "bsdf" && format != "ssdd")
+      throw Error::invalid("format", fmt::format("'{}' is not an export format (allowed: csv, "
+                                                 "json, bsdf, ssdd)",
+                                                 format));
+    const auto scan = require_scan(s.store, id);
+    if (scan.points_done > kMaxExportPoints)
+      throw Error(Errc::unsupported,
+                  fmt::format("scan {} has {} points, more than one export carries ({}); page "
+                              "through scan.points",
+                              id, scan.points_done, kMaxExportPoints),
+                  "scan");
+    const auto points = s.store.points(id, 0, scan.points_done + 1);
+    const auto e = export_scan(scan, points, format);
+    return json{{"scan", id}, {"format", e.format}, {"filename", e.filename},
+                {"media_type", e.media_type}, {"points", points.size()}, {"content", e.content}};
+  });
+}
+
+}  // namespace gonio::daemon
