@@ -11,7 +11,7 @@
 #include "gonio/daemon/divergence.hpp"
 #include "gonio/daemon/instrument.hpp"
 #include "gonio/daemon/point_reduction.hpp"
-#include "gonio/drivers/photometer.hpp"
+#include "gonio/drivers/photometer/photometer.hpp"
 
 namespace gonio::daemon {
 

@@ -10,11 +10,9 @@
 #include "ctl/ctl_internal.hpp"
 #include "gonio/daemon/ctl.hpp"
 #include "gonio/daemon/rpc.hpp"
+#include "gonio/proto/version.hpp"
 #include "gonio/proto/error.hpp"
 
-#ifndef GONIO_VERSION
-#define GONIO_VERSION "0.0.0"
-#endif
 
 namespace gonio::daemon {
 namespace ctl {
@@ -79,7 +77,7 @@ int gonioctl_main(int argc, char** argv) {
   app.add_option("--token-file", o.token_file, "file holding the bearer token (TCP)");
   app.add_flag("--json", o.json, "print JSON results");
   app.add_option("--timeout", o.timeout_s, "seconds to wait for an answer")->check(CLI::Range(0.1, 86400.0));
-  app.set_version_flag("--version", "gonioctl " GONIO_VERSION);
+  app.set_version_flag("--version", "gonioctl " GONIO_VERSION_STRING);
 
   // The command groups, in the order of the help.
   ctl::Context ctx;

@@ -5,7 +5,7 @@
 
 #include <fmt/format.h>
 
-#include "gonio/drivers/motion_controller.hpp"
+#include "gonio/drivers/motion/motion_controller.hpp"
 #include "methods/params.hpp"
 #include "methods/registrar.hpp"
 

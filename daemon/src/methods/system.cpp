@@ -10,12 +10,10 @@
 
 #include <fmt/format.h>
 
+#include "gonio/proto/version.hpp"
 #include "methods/params.hpp"
 #include "methods/registrar.hpp"
 
-#ifndef GONIO_VERSION
-#define GONIO_VERSION "0.0.0"
-#endif
 
 namespace gonio::daemon {
 
@@ -68,7 +66,7 @@ void register_system(MethodRegistrar& reg, Services& s) {
   // particular order.
   const auto fixed = [&s] {
     std::string t = json{{"name", "goniod"},
-                         {"version", GONIO_VERSION},
+                         {"version", proto::kVersion},
                          {"api_version", openrpc_document()["info"]["version"]},
                          {"schema_version", Store::kSchemaVersion},
                          {"started_at", s.started_at},

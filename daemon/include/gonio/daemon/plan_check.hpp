@@ -19,8 +19,8 @@
 #include <optional>
 #include <vector>
 
-#include "gonio/drivers/collision.hpp"
-#include "gonio/drivers/motion_controller.hpp"
+#include "gonio/drivers/motion/collision.hpp"
+#include "gonio/drivers/motion/motion_controller.hpp"
 #include "gonio/proto/scan.hpp"
 #include "gonio/proto/spectrum.hpp"
 
