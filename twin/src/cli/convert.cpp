@@ -136,6 +136,7 @@ void add_convert(CLI::App& app) {
       TabulatedParts parts;
       SsddWriteOptions ssdd;
       if (*binary) ssdd.data = SsddData::binary;
+      ssdd.name_entry = false;  // a comment: no reader uses NAME
       const auto t0 = std::chrono::steady_clock::now();
       if (!input->empty()) {
         if (!model->bsdf.empty())

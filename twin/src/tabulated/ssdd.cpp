@@ -480,8 +480,9 @@ std::vector<std::string> write_ssdd(std::ostream& out, const TabulatedParts& par
     std::istringstream cs(comment);
     for (std::string l; std::getline(cs, l);) os << "# " << l << '\n';
   }
-  // SSDD 0.3 (2026-05-01): the version this writer follows; nothing it writes differs from
-  // 0.2, which added no entries either, so readers of both accept the file.
+  // SSDD 0.3 (2026-05-01), the version this writer follows. 0.3 adds only the distorted
+  // spherical parametrization to 0.2, which this writer never uses, so 0.2 readers read the
+  // file as well.
   os << "VERSION 0.3\n";
   if (!o.software.empty()) os << "SOFTWARE " << one_line(o.software) << '\n';
   if (!o.date.empty()) os << "DATE " << one_line(o.date) << '\n';

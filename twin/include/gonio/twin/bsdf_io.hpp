@@ -76,9 +76,11 @@ struct SsddWriteOptions {
   std::string date;                 // DATE entry, YYYY-MM-DD (empty: omitted)
   SsddSource source = SsddSource::unset;  // SOURCE_TYPE of every block
   std::string device;               // DEVICE of every block (empty: omitted)
-  // NAME of every block from TabulatedParts::name. Off by default: readers do not use it
-  // (libbsdf reports it as not implemented); the name then goes into a '#' comment line.
-  bool name_entry = false;
+  // NAME of every block from TabulatedParts::name (when it is not empty), so that write →
+  // read keeps the parts exactly. Off: the name goes into a '#' comment line instead — what
+  // `gonio-twin convert` does, since readers do not use NAME (libbsdf logs it as not
+  // implemented).
+  bool name_entry = true;
 };
 // Writes every part present. Grey tables are `monochrome`, others `spectrum`. Returns one
 // warning per incidence angle of a BRDF / BTDF table whose directional reflectance
