@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -161,6 +163,32 @@ TEST(GonioTwinCli, ConvertToIssaWritesTheLuminanceFactor) {
   const double beta = nlohmann::json::parse(r.out)[0]["radiance_factor"][0].get<double>();
   EXPECT_GT(beta, 0.2);
   EXPECT_LT(beta, 0.4);
+}
+
+TEST(GonioTwinCli, ConvertKeepsEnergyAndColour) {
+  // A glossy conductor: the file's TIS lines (its reflectance as a reader interpolates it)
+  // stay below 1 up to grazing incidence, and a spectral table is written as XYZ.
+  TempDir dir;
+  const auto issa = (dir.path() / "g.bsdf").string();
+  auto r = gonio_twin("convert --bsdf conductor:alpha=0.1,eta=0.2,k=3.9 --wavelengths 450,550,650 "
+                      "--theta-step 17 --output " + issa);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("lobe-following grid"), std::string::npos) << r.err;
+  std::ifstream in(issa);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("SpectralContent\tXYZ"), std::string::npos);
+  EXPECT_NE(text.find("TristimulusZ"), std::string::npos);
+  std::istringstream lines(text);
+  int tis = 0;
+  for (std::string line; std::getline(lines, line);)
+    if (line.rfind("TIS ", 0) == 0) {
+      ++tis;
+      EXPECT_LT(std::stod(line.substr(4)), 1.02) << line;
+    }
+  EXPECT_EQ(tis % 3, 0);
+  EXPECT_GE(tis, 3 * 6);  // θi 0, 17, 34, 51, 68, 85 per block, and any added between them
+  r = gonio_twin("convert --input " + issa + " --monochrome --output " + (dir.path() / "m.bsdf").string());
+  ASSERT_EQ(r.code, 0) << r.err;
 }
 
 TEST(GonioTwinCli, RenderWritesAPng) {

@@ -64,6 +64,17 @@ struct MirrorFrame {
     const double sin_r = std::sqrt(std::max(0.0, 1 - cos_r * cos_r));
     return s * cos_r + (e1 * std::cos(a) + e2 * std::sin(a)) * sin_r;
   }
+  // Angle from s (radians) at which the ray of azimuth `a` about s reaches the sample
+  // plane: z(r) = cos r·s.z + sin r·(cos a·e1.z + sin a·e2.z) = 0.
+  double horizon_radial(double a) const noexcept {
+    const double A = s.z, B = std::cos(a) * e1.z + std::sin(a) * e2.z;
+    return std::atan2(B, A) + 1.5707963267948966;
+  }
+  // The direction at (r, a), pulled back onto the horizon (just above it) when r lies beyond:
+  // the value a table keeps for nodes below the sample plane.
+  Vec3 direction_above(double r, double a) const noexcept {
+    return direction(std::cos(std::min(r, horizon_radial(a) - 1e-6)), a);
+  }
   // Angle from s (degrees) and azimuth about it (radians, [0, 2π)) of a unit direction.
   void angles(const Vec3& d, double& r_deg, double& a_rad) const noexcept {
     r_deg = std::acos(clamp_unit(dot(d, s))) * kRadToDeg;

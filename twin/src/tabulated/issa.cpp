@@ -232,39 +232,6 @@ void check_option_list(const std::vector<double>& v, std::string_view field, dou
   }
 }
 
-// ∫ f cos θo dΩo over the hemisphere for incidence θi, midpoint rule in the mirror frame
-// (fine near the specular peak, where tables are sharp).
-double hemispherical_integral(const BsdfTable& grey, double theta_i_deg) {
-  const Vec3 wi{-std::sin(theta_i_deg * kDegToRad), 0, std::cos(theta_i_deg * kDegToRad)};
-  const auto frame = tab::MirrorFrame::of(wi);
-  static const std::vector<double> edges{0, 0.25, 0.5, 1, 2, 3, 4, 6, 8, 10, 15, 20, 25, 30, 40,
-                                         50, 60, 75, 90, 105, 120, 135, 150, 165, 180};
-  constexpr int kSub = 6, kAz = 144;
-  double sum = 0, f = 0;
-  for (std::size_t j = 0; j + 1 < edges.size(); ++j)
-    for (int s = 0; s < kSub; ++s) {
-      const double r0 = (edges[j] + (edges[j + 1] - edges[j]) * s / kSub) * kDegToRad;
-      const double r1 = (edges[j] + (edges[j + 1] - edges[j]) * (s + 1) / kSub) * kDegToRad;
-      const double c0 = std::cos(r0), c1 = std::cos(r1);
-      const double cm = std::cos(0.5 * (r0 + r1));
-      for (int m = 0; m < kAz; ++m) {
-        const double a = (m + 0.5) * 2 * kPi / kAz;
-        const Vec3 wo = frame.direction(cm, a);
-        if (!(wo.z > 0)) continue;
-        grey.eval(wi, wo, {&f, 1});
-        sum += f * wo.z * (c0 - c1) * (2 * kPi / kAz);
-      }
-    }
-  return sum;
-}
-
-// Radial angle (radians) at which the ray of azimuth `a` about the mirror direction reaches
-// the sample plane: z(r) = cos r·s.z + sin r·(cos a·e1.z + sin a·e2.z) = 0.
-double horizon_radial(const tab::MirrorFrame& f, double a) {
-  const double A = f.s.z, B = std::cos(a) * f.e1.z + std::sin(a) * f.e2.z;
-  return std::atan2(B, A) + kPi / 2;
-}
-
 }  // namespace
 
 TabulatedParts read_issa(std::istream& in, std::string_view source) {
@@ -333,8 +300,8 @@ TabulatedParts read_issa(const std::string& path) {
   return read_issa(in, path);
 }
 
-void write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
-                const IssaWriteOptions& o) {
+std::vector<std::string> write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
+                                    const IssaWriteOptions& o) {
   if (table.empty()) throw Error::invalid("table", "is empty");
   if (!table.isotropic())
     throw Error(Errc::unsupported,
@@ -373,6 +340,48 @@ void write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
   check_option_list(incidence, "incidence", 0, 90);
   check_option_list(azimuth, "azimuth", 0, plane ? 180 : 360);
   check_option_list(radial, "radial", 0, 180);
+
+  // The file's own tables: the values exactly as written, so that TIS is the integral of
+  // what a reader interpolates, not of the table they were resampled from.
+  std::vector<BsdfTable> file;
+  for (const BsdfTable& t : channels) {
+    if (native) {
+      file.push_back(t);
+      continue;
+    }
+    std::vector<double> v(incidence.size() * radial.size() * azimuth.size());
+    double f = 0;
+    for (std::size_t i = 0; i < incidence.size(); ++i) {
+      const double th = incidence[i] * kDegToRad;
+      const Vec3 wi{-std::sin(th), 0, std::cos(th)};
+      const auto frame = tab::MirrorFrame::of(wi);
+      for (std::size_t a = 0; a < azimuth.size(); ++a)
+        for (std::size_t j = 0; j < radial.size(); ++j) {
+          // Beyond the horizon the file still needs a value; the one at the horizon along
+          // the same azimuth keeps interpolation near grazing angles unbiased.
+          const Vec3 wo = frame.direction_above(radial[j] * kDegToRad, azimuth[a] * kDegToRad);
+          t.eval(wi, wo, {&f, 1});
+          v[(a * radial.size() + j) * incidence.size() + i] = f;
+        }
+    }
+    file.emplace_back(TableParam::specular, BsdfTable::Axes{incidence, {}, radial, azimuth},
+                      std::vector<double>{}, std::move(v), TableReduction{plane, false});
+  }
+  // TIS per channel and angle of incidence; an energy check on the luminance channel (Y, or
+  // the monochrome one): above 1 is named in the file and returned.
+  std::vector<std::vector<double>> tis(file.size(), std::vector<double>(incidence.size()));
+  for (std::size_t k = 0; k < file.size(); ++k)
+    for (std::size_t i = 0; i < incidence.size(); ++i)
+      tis[k][i] = table_albedo(file[k], incidence[i])[0];
+  std::vector<std::string> warnings;
+  const auto& lum = tis[o.xyz_weights ? 1 : 0];
+  for (std::size_t i = 0; i < incidence.size(); ++i)
+    if (lum[i] > 1 + 1e-3)
+      warnings.push_back(fmt::format(
+          "directional {} {:.4g} exceeds 1 at AngleOfIncidence {:g}: the table {} more light "
+          "than falls on it", transmission ? "transmittance" : "reflectance", lum[i],
+          incidence[i], transmission ? "transmits" : "reflects"));
+
   const auto fmt_list = [](const std::vector<double>& v) {
     std::string s;
     for (std::size_t i = 0; i < v.size(); ++i) s += (i ? "\t" : "") + text::format_number(v[i]);
@@ -380,8 +389,10 @@ void write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
   };
 
   std::ostream& os = out;
-  if (!o.comment.empty()) {
-    std::istringstream cs(o.comment);
+  std::string comment = o.comment;
+  for (const auto& w : warnings) comment += (comment.empty() ? "" : "\n") + ("warning: " + w);
+  if (!comment.empty()) {
+    std::istringstream cs(comment);
     for (std::string line; std::getline(cs, line);) os << "# " << line << '\n';
   }
   os << "Source\tMeasured\n"
@@ -393,29 +404,16 @@ void write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
      << "ScatterAzimuth\t" << azimuth.size() << '\n' << fmt_list(azimuth) << '\n'
      << "ScatterRadial\t" << radial.size() << '\n' << fmt_list(radial) << "\n\n";
   static constexpr const char* kLabels[3] = {"TristimulusX", "TristimulusY", "TristimulusZ"};
-  for (std::size_t k = 0; k < channels.size(); ++k) {
-    const BsdfTable& t = channels[k];
+  for (std::size_t k = 0; k < file.size(); ++k) {
+    const BsdfTable& t = file[k];
     os << (o.xyz_weights ? kLabels[k] : "Monochrome") << "\nDataBegin\n";
     for (std::size_t i = 0; i < incidence.size(); ++i) {
-      const double th = incidence[i] * kDegToRad;
-      const Vec3 wi{-std::sin(th), 0, std::cos(th)};
-      const auto frame = tab::MirrorFrame::of(wi);
-      os << "TIS " << fmt::format("{:.6g}", hemispherical_integral(t, incidence[i])) << '\n';
-      double f = 0;
+      os << "TIS " << fmt::format("{:.6g}", tis[k][i]) << '\n';
       fmt::memory_buffer buf;
       for (std::size_t a = 0; a < azimuth.size(); ++a) {
         for (std::size_t j = 0; j < radial.size(); ++j) {
-          if (native) {
-            f = t.at(i, 0, j, a, 0);
-          } else {
-            // Beyond the horizon the file still needs a value; the one at the horizon along
-            // the same azimuth keeps interpolation near grazing angles unbiased.
-            const double az = azimuth[a] * kDegToRad;
-            const double r = std::min(radial[j] * kDegToRad, horizon_radial(frame, az) - 1e-6);
-            t.eval(wi, frame.direction(std::cos(r), az), {&f, 1});
-          }
           if (j) buf.push_back('\t');
-          fmt::format_to(std::back_inserter(buf), "{}", f);
+          fmt::format_to(std::back_inserter(buf), "{}", t.at(i, 0, j, a, 0));
         }
         buf.push_back('\n');
       }
@@ -424,15 +422,17 @@ void write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
     os << "DataEnd\n";
   }
   if (!out) throw Error(Errc::io_error, "could not write the IS-SA data");
+  return warnings;
 }
 
-void write_issa(const std::string& path, const BsdfTable& table, bool transmission,
-                const IssaWriteOptions& options) {
+std::vector<std::string> write_issa(const std::string& path, const BsdfTable& table,
+                                    bool transmission, const IssaWriteOptions& options) {
   std::ofstream out(path, std::ios::binary);
   if (!out) throw Error(Errc::io_error, fmt::format("cannot create '{}'", path), "path");
-  write_issa(out, table, transmission, options);
+  auto warnings = write_issa(out, table, transmission, options);
   out.close();
   if (!out) throw Error(Errc::io_error, fmt::format("cannot write '{}'", path), "path");
+  return warnings;
 }
 
 }  // namespace gonio::twin

@@ -48,10 +48,11 @@ BsdfPtr load_bsdf_file(const std::string& path, const WavelengthGrid& grid) {
   return std::make_shared<TabulatedBsdf>(grid, read_bsdf_file(path), "@" + path);
 }
 
-void write_bsdf_file(const std::string& path, const TabulatedParts& parts,
-                     const IssaWriteOptions& issa) {
+std::vector<std::string> write_bsdf_file(const std::string& path, const TabulatedParts& parts,
+                                         const IssaWriteOptions& issa,
+                                         const SsddWriteOptions& ssdd) {
   const std::string ext = extension(path);
-  if (ext == ".ssdd") return write_ssdd(path, parts);
+  if (ext == ".ssdd") return write_ssdd(path, parts, ssdd);
   if (ext != ".bsdf")
     throw Error(Errc::invalid_argument,
                 fmt::format("'{}': cannot write extension '{}'; allowed: .bsdf (IS-SA), .ssdd",
@@ -68,7 +69,7 @@ void write_bsdf_file(const std::string& path, const TabulatedParts& parts,
                             path),
                 "path");
   if (!parts.brdf && !parts.btdf) throw Error::invalid("parts", "hold no BRDF or BTDF");
-  write_issa(path, parts.brdf ? *parts.brdf : *parts.btdf, !parts.brdf, issa);
+  return write_issa(path, parts.brdf ? *parts.brdf : *parts.btdf, !parts.brdf, issa);
 }
 
 }  // namespace gonio::twin

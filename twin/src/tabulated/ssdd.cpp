@@ -1,6 +1,7 @@
 // Surface Scattering Distribution Data (.ssdd): reader and writer.
 //
-// Format: libbsdf doc/SsddFileFormatSpecification.md, version 0.2 (Kimura, 2023): a header
+// Format: libbsdf doc/SsddFileFormatSpecification.md, version 0.3 (Kimura, 2026; 0.2 of 2023
+// reads the same): a header
 // starting with "VERSION <major>.<minor>", then up to four data blocks (brdf, btdf,
 // specular_reflectance, specular_transmittance), each ASCII meta-data in a fixed order —
 // DATA_TYPE, COLOR_MODEL, WAVELENGTH_LIST, PARAM_TYPE, REDUCTION_TYPE, PARAM0…4_LIST,
@@ -450,19 +451,50 @@ TabulatedParts read_ssdd(const std::string& path) {
   return read_ssdd(in, path);
 }
 
-void write_ssdd(std::ostream& out, const TabulatedParts& parts, const SsddWriteOptions& o) {
+std::vector<std::string> write_ssdd(std::ostream& out, const TabulatedParts& parts,
+                                    const SsddWriteOptions& o) {
   if (parts.empty()) throw Error::invalid("parts", "hold no table");
   const bool binary = o.data == SsddData::binary;
+  // Energy check of the BRDF and BTDF blocks at their own incidence nodes (spherical and
+  // specular tables; the θh of a half-difference table is no incidence angle, so those are
+  // checked on a 5° list).
+  std::vector<std::string> warnings;
+  const auto check = [&](const BsdfTable& t, bool transmission) {
+    std::vector<double> ti = t.axis(0);
+    if (t.param() == TableParam::half_difference) {
+      ti.clear();
+      for (int k = 0; k <= 17; ++k) ti.push_back(5.0 * k);
+    }
+    for (auto& w : energy_warnings(t, transmission, ti))
+      warnings.push_back(std::string(transmission ? "btdf: " : "brdf: ") + w);
+  };
+  if (parts.brdf) check(*parts.brdf, false);
+  if (parts.btdf) check(*parts.btdf, true);
+
   std::ostream& os = out;
-  if (!o.comment.empty()) {
-    std::istringstream cs(o.comment);
+  std::string comment = o.comment;
+  if (!o.name_entry && !parts.name.empty())
+    comment += (comment.empty() ? "" : "\n") + one_line(parts.name);
+  for (const auto& w : warnings) comment += (comment.empty() ? "" : "\n") + ("warning: " + w);
+  if (!comment.empty()) {
+    std::istringstream cs(comment);
     for (std::string l; std::getline(cs, l);) os << "# " << l << '\n';
   }
-  os << "VERSION 0.2\n";
+  // SSDD 0.3 (2026-05-01), the version this writer follows. 0.3 adds only the distorted
+  // spherical parametrization to 0.2, which this writer never uses, so 0.2 readers read the
+  // file as well.
+  os << "VERSION 0.3\n";
   if (!o.software.empty()) os << "SOFTWARE " << one_line(o.software) << '\n';
   if (!o.date.empty()) os << "DATE " << one_line(o.date) << '\n';
-  const auto name = [&] {
-    if (!parts.name.empty()) os << "NAME " << one_line(parts.name) << '\n';
+  const auto optional_entries = [&] {
+    if (o.name_entry && !parts.name.empty()) os << "NAME " << one_line(parts.name) << '\n';
+    switch (o.source) {
+      case SsddSource::unset: break;
+      case SsddSource::measured: os << "SOURCE_TYPE measured\n"; break;
+      case SsddSource::generated: os << "SOURCE_TYPE generated\n"; break;
+      case SsddSource::edited: os << "SOURCE_TYPE edited\n"; break;
+    }
+    if (!o.device.empty()) os << "DEVICE " << one_line(o.device) << '\n';
   };
   const auto bsdf = [&](const BsdfTable& t, std::string_view type) {
     os << "\nDATA_TYPE " << type << '\n';
@@ -480,7 +512,7 @@ void write_ssdd(std::ostream& out, const TabulatedParts& parts, const SsddWriteO
     if (!t.isotropic()) os << "PARAM1_LIST " << list_text(t.axis(1)) << '\n';
     os << "PARAM2_LIST " << list_text(t.axis(2)) << '\n';
     os << "PARAM3_LIST " << list_text(t.axis(3)) << '\n';
-    name();
+    optional_entries();
     os << "DATA " << (binary ? "binary" : "ascii") << '\n';
     write_values(os, t.values(), t.channels(), binary, &t.axis(2), &t.axis(3),
                  t.nodes(0) * t.nodes(1));
@@ -490,7 +522,7 @@ void write_ssdd(std::ostream& out, const TabulatedParts& parts, const SsddWriteO
     write_colour(os, t.wavelengths());
     os << "PARAM0_LIST " << list_text(t.theta_i()) << '\n';
     if (!t.phi_i().empty()) os << "PARAM1_LIST " << list_text(t.phi_i()) << '\n';
-    name();
+    optional_entries();
     os << "DATA " << (binary ? "binary" : "ascii") << '\n';
     write_values(os, t.values(), t.channels(), binary, nullptr, nullptr, 0);
   };
@@ -499,14 +531,17 @@ void write_ssdd(std::ostream& out, const TabulatedParts& parts, const SsddWriteO
   if (parts.specular_reflectance) specular(*parts.specular_reflectance, "specular_reflectance");
   if (parts.specular_transmittance) specular(*parts.specular_transmittance, "specular_transmittance");
   if (!out) throw Error(Errc::io_error, "could not write the SSDD data");
+  return warnings;
 }
 
-void write_ssdd(const std::string& path, const TabulatedParts& parts, const SsddWriteOptions& o) {
+std::vector<std::string> write_ssdd(const std::string& path, const TabulatedParts& parts,
+                                    const SsddWriteOptions& o) {
   std::ofstream out(path, std::ios::binary);
   if (!out) throw Error(Errc::io_error, fmt::format("cannot create '{}'", path), "path");
-  write_ssdd(out, parts, o);
+  auto warnings = write_ssdd(out, parts, o);
   out.close();
   if (!out) throw Error(Errc::io_error, fmt::format("cannot write '{}'", path), "path");
+  return warnings;
 }
 
 }  // namespace gonio::twin

@@ -140,11 +140,12 @@ TEST(Ssdd, AsciiRoundTripIsExact) {
   SsddWriteOptions o;
   o.comment = "written by a test";
   o.date = "2024-05-06";
+  o.name_entry = true;
   write_ssdd(out, p, o);
   const auto back = read_text(out.str());
   p.name = "round trip with a newline";
   EXPECT_EQ(back, p);
-  EXPECT_NE(out.str().find("# written by a test\nVERSION 0.2\n"), std::string::npos);
+  EXPECT_NE(out.str().find("# written by a test\nVERSION 0.3\n"), std::string::npos);
   EXPECT_NE(out.str().find("PARAM1_LIST 0 90 180 270"), std::string::npos);
 }
 

@@ -51,28 +51,45 @@ struct IssaWriteOptions {
   std::optional<std::array<std::vector<double>, 3>> xyz_weights;
   std::string comment;  // written as '#' lines at the top
 };
-// Writes one table (BRDF, or BTDF when `transmission`). Values are f in sr⁻¹; TIS per angle
-// of incidence is the table's directional-hemispherical integral.
-void write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
-                const IssaWriteOptions& options = {});
-void write_issa(const std::string& path, const BsdfTable& table, bool transmission,
-                const IssaWriteOptions& options = {});
+// Writes one table (BRDF, or BTDF when `transmission`). Values are f in sr⁻¹; TIS per
+// channel and angle of incidence is the directional-hemispherical integral of the file's own
+// values as a reader interpolates them (table_albedo of what is written). Returns one
+// warning per angle of incidence whose reflectance (Y or Monochrome) exceeds 1, naming it;
+// the warnings are also written as '#' comments at the top of the file.
+std::vector<std::string> write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
+                                    const IssaWriteOptions& options = {});
+std::vector<std::string> write_issa(const std::string& path, const BsdfTable& table,
+                                    bool transmission, const IssaWriteOptions& options = {});
 
 // ---- SSDD ----------------------------------------------------------------------------------
 TabulatedParts read_ssdd(std::istream& in, std::string_view source = "<stream>");
 TabulatedParts read_ssdd(const std::string& path);
 
 enum class SsddData { ascii, binary };
+// What goes into the optional entries of SSDD 0.3 (libbsdf doc/SsddFileFormatSpecification.md,
+// version 0.3): none of them is needed by a reader, so each is written only when set.
+enum class SsddSource { unset, measured, generated, edited };
 struct SsddWriteOptions {
   SsddData data = SsddData::ascii;  // binary = IEEE 754 float32, little-endian
   std::string comment;              // '#' lines before VERSION
   std::string software = "gonio";   // SOFTWARE entry (empty: omitted)
   std::string date;                 // DATE entry, YYYY-MM-DD (empty: omitted)
+  SsddSource source = SsddSource::unset;  // SOURCE_TYPE of every block
+  std::string device;               // DEVICE of every block (empty: omitted)
+  // NAME of every block from TabulatedParts::name (when it is not empty), so that write →
+  // read keeps the parts exactly. Off: the name goes into a '#' comment line instead — what
+  // `gonio-twin convert` does, since readers do not use NAME (libbsdf logs it as not
+  // implemented).
+  bool name_entry = true;
 };
-// Writes every part present. Grey tables are `monochrome`, others `spectrum`.
-void write_ssdd(std::ostream& out, const TabulatedParts& parts, const SsddWriteOptions& options = {});
-void write_ssdd(const std::string& path, const TabulatedParts& parts,
-                const SsddWriteOptions& options = {});
+// Writes every part present. Grey tables are `monochrome`, others `spectrum`. Returns one
+// warning per incidence angle of a BRDF / BTDF table whose directional reflectance
+// (transmittance) exceeds 1 in some channel, naming the angle; they are also written as '#'
+// comments before VERSION.
+std::vector<std::string> write_ssdd(std::ostream& out, const TabulatedParts& parts,
+                                    const SsddWriteOptions& options = {});
+std::vector<std::string> write_ssdd(const std::string& path, const TabulatedParts& parts,
+                                    const SsddWriteOptions& options = {});
 
 // ---- MERL ------------------------------------------------------------------------------------
 // Header of three little-endian int32 (θh, θd, φd resolution: 90, 90, 180 in the database),
@@ -87,7 +104,9 @@ TabulatedParts read_merl(const std::string& path);
 TabulatedParts read_bsdf_file(const std::string& path);
 // .ssdd → write_ssdd (all parts); .bsdf → write_issa of the single BRDF or BTDF (a file with
 // both, or with specular parts, needs .ssdd: Error(unsupported)). `issa` applies to .bsdf.
-void write_bsdf_file(const std::string& path, const TabulatedParts& parts,
-                     const IssaWriteOptions& issa = {});
+// Returns the writer's energy warnings.
+std::vector<std::string> write_bsdf_file(const std::string& path, const TabulatedParts& parts,
+                                         const IssaWriteOptions& issa = {},
+                                         const SsddWriteOptions& ssdd = {});
 
 }  // namespace gonio::twin

@@ -48,6 +48,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "gonio/twin/bsdf.hpp"
@@ -217,5 +218,68 @@ BsdfTable tabulate(const Bsdf& bsdf, const AngularGrid& grid, bool transmission 
 // transmittance tables over theta_i) when it has any.
 TabulatedParts tabulate_parts(const Bsdf& bsdf, const AngularGrid& grid, bool reflection = true,
                               bool transmission = false);
+
+// ---- energy ---------------------------------------------------------------------------------
+// Directional-hemispherical reflectance ∫ f cos θo dωo of a table (its transmittance for a
+// BTDF table), per channel, at incidence θi (degrees, in the plane of measurement): the
+// integral of the table's own multilinear interpolant — what a reader that interpolates
+// the file gets — by a product midpoint rule about the specular direction, on the table's
+// nodes subdivided (specular tables) or on a list refined toward the specular direction.
+std::vector<double> table_albedo(const BsdfTable& table, double theta_i_deg);
+// The same integral of a model's eval (reflection, delta lobes excluded), per channel, on
+// radial breakpoints (degrees from the specular direction, 0…180) and azimuthal ones
+// (0…180, mirrored onto the whole circle), each subdivided to ≤ 0.5° / 1°.
+std::vector<double> model_albedo(const Bsdf& model, double theta_i_deg,
+                                 const std::vector<double>& radial_edges,
+                                 const std::vector<double>& azimuth_edges);
+// On a default list refined toward the specular direction (suits lobes down to α ≈ 0.02).
+std::vector<double> model_albedo(const Bsdf& model, double theta_i_deg);
+// One message per θi whose table reflectance exceeds 1 in some channel, naming the angle
+// (and the wavelength). Writers put these in the file's comments and return them.
+std::vector<std::string> energy_warnings(const BsdfTable& table, bool transmission,
+                                         std::span<const double> theta_i);
+
+// ---- lobe-following grids -------------------------------------------------------------------
+// A specular-parametrization grid (degrees): θi, radial angle from the specular direction,
+// azimuth about it 0…180 (bilateral: the model is taken as isotropic and symmetric about the
+// plane of incidence).
+struct SpecularGrid {
+  std::vector<double> theta_i, radial, azimuth;
+};
+
+struct LobeGridOptions {
+  std::vector<double> theta_i;     // empty: 0:5:85
+  double tolerance = 0.02;         // largest relative interpolation error along each axis
+  double floor = 0.01;             // of f·cos θo, relative to max(f·cos θo, floor × its peak)
+  double energy_tolerance = 0.02;  // largest relative error of the table's reflectance
+  double azimuth_step = 15;        // the coarsest azimuth step, where nothing asks for less
+  double min_radial_step = 0.02, min_azimuth_step = 0.25, min_incidence_step = 0.5;
+  std::size_t max_nodes = 400;     // per axis
+};
+
+// The grid's reflectance against the model's (channel mean) at every θi node.
+struct LobeGridReport {
+  std::vector<double> theta_i, table, model;
+  double worst = 0;      // largest relative error, nodes and halfway between them
+  double tolerance = 0;  // interpolation tolerance finally used
+};
+
+// Refines radial and azimuthal nodes until linear interpolation of the model's channel-mean
+// f along each axis, weighted by cos θo, stays within `tolerance` × max(f·cos θo,
+// floor × peak) at a quarter, half and three quarters of every interval, at every θi
+// (intervals with an end below the sample plane excepted); then checks
+// the table's reflectance against the model's at every θi node and halfway between them,
+// and while it is off by more than `energy_tolerance` halves the tolerance and adds θi
+// nodes where the halfway check fails (at most four times).
+SpecularGrid lobe_grid(const Bsdf& model, const LobeGridOptions& options = {},
+                       LobeGridReport* report = nullptr);
+// The model's BRDF on the grid, every channel (or their mean with `grey`): a bilateral
+// specular table. Nodes below the sample plane hold the value at the horizon along the same
+// azimuth, which keeps interpolation near grazing angles unbiased.
+BsdfTable tabulate_specular(const Bsdf& model, const SpecularGrid& grid, bool grey = false);
+// (wi, wo) of every node in table order (θi fastest, then radial, then azimuth), wo pulled
+// onto the horizon where the node lies below it: for filling the grid by other means
+// (virtual measurement).
+std::vector<std::pair<Vec3, Vec3>> specular_grid_directions(const SpecularGrid& grid);
 
 }  // namespace gonio::twin
