@@ -55,7 +55,6 @@ void BM_FitConductor(benchmark::State& state) {
                                   : "conductor:alpha=?0.1,eta=0.2,k=3.9";
   FitOptions o;
   o.threads = 2;
-  o.naive = false;
   FitResult r;
   for (auto _ : state) r = fit_material(data, model, InstrumentProfile::preset("gcms4"), o);
   report(state, r, {0.04, 0.2, 3.9});
@@ -67,7 +66,6 @@ void BM_Calibrate(benchmark::State& state) {
   const auto& data = data_for("conductor:alpha=0.04,eta=0.2,k=3.9", -0.2, 1.02);
   FitOptions o;
   o.threads = 2;
-  o.naive = false;
   FitResult r;
   for (auto _ : state)
     r = calibrate(data, "conductor:alpha=0.04,eta=0.2,k=3.9", {"receive_offset_deg", "gain"},

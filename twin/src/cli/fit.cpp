@@ -2,7 +2,10 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <algorithm>
+#include <array>
 #include <map>
+#include <set>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -11,6 +14,8 @@
 #include "cli/fit_output.hpp"
 #include "cli/output.hpp"
 #include "gonio/proto/error.hpp"
+#include "gonio/twin/bsdf_io.hpp"
+#include "gonio/twin/color.hpp"
 #include "gonio/twin/plot.hpp"
 
 namespace gonio::twin::cli {
@@ -167,6 +172,78 @@ void write_corrected_csv(const std::string& path, const std::vector<CorrectedPoi
   if (!out) throw Error(Errc::io_error, fmt::format("cannot write '{}'", path), "corrected");
 }
 
+// The corrected values as an isotropic spherical BRDF table (f = β/π): θi and |θr| nodes of
+// the in-plane reflection points, φo = 0 (θr < 0) and 180 (θr > 0), repeats averaged. The
+// points must fill the grid, as for goniod's tabulated exports.
+BsdfTable corrected_table(const std::vector<CorrectedPoint>& points, const WavelengthGrid& grid) {
+  std::set<double> ti, to, sides;
+  std::map<std::array<double, 3>, std::pair<std::vector<double>, int>> cells;
+  for (const auto& p : points) {
+    const auto& g = p.geometry;
+    if (!g.in_measurement_plane() || g.is_transmission())
+      throw Error(Errc::unsupported,
+                  fmt::format("{} is not an in-plane reflection geometry: write the corrected "
+                              "table as .csv", g.to_string()),
+                  "corrected");
+    std::vector<double> here;
+    if (g.theta_r > 0) here = {180.0};
+    else if (g.theta_r < 0) here = {0.0};
+    else here = {0.0, 180.0};
+    ti.insert(g.theta_i);
+    to.insert(std::abs(g.theta_r));
+    for (double side : here) {
+      sides.insert(side);
+      auto& cell = cells[{g.theta_i, std::abs(g.theta_r), side}];
+      if (cell.first.empty()) cell.first.assign(grid.size(), 0.0);
+      for (std::size_t c = 0; c < grid.size(); ++c)
+        cell.first[c] += std::max(0.0, p.corrected[c]) / kPi;
+      ++cell.second;
+    }
+  }
+  const std::vector<double> p0(ti.begin(), ti.end()), p2(to.begin(), to.end()),
+      p3(sides.begin(), sides.end());
+  std::vector<double> values(p0.size() * p2.size() * p3.size() * grid.size());
+  for (std::size_t i3 = 0; i3 < p3.size(); ++i3)
+    for (std::size_t i2 = 0; i2 < p2.size(); ++i2)
+      for (std::size_t i0 = 0; i0 < p0.size(); ++i0) {
+        const auto it = cells.find({p0[i0], p2[i2], p3[i3]});
+        if (it == cells.end())
+          throw Error(Errc::unsupported,
+                      fmt::format("the points are not a full grid: none at θi = {:g}°, θr = "
+                                  "{:g}°; write the corrected table as .csv",
+                                  p0[i0], p3[i3] > 90 ? p2[i2] : -p2[i2]),
+                      "corrected");
+        const std::size_t base = ((i3 * p2.size() + i2) * p0.size() + i0) * grid.size();
+        for (std::size_t c = 0; c < grid.size(); ++c)
+          values[base + c] = it->second.first[c] / it->second.second;
+      }
+  BsdfTable::Axes axes;
+  axes.p0 = p0;
+  axes.p2 = p2;
+  axes.p3 = p3;
+  return BsdfTable(TableParam::spherical, std::move(axes), grid.values(), std::move(values),
+                   TableReduction{true, false});
+}
+
+void write_corrected(const std::string& path, const std::vector<CorrectedPoint>& points,
+                     const WavelengthGrid& grid, const std::string& spec) {
+  const auto dot = path.find_last_of('.');
+  std::string ext = dot == std::string::npos ? "" : path.substr(dot);
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".csv") return write_corrected_csv(path, points, grid);
+  if (ext != ".bsdf" && ext != ".ssdd")
+    throw Error::invalid("corrected", fmt::format("'{}': write .csv, .bsdf (IS-SA) or .ssdd", path));
+  TabulatedParts parts;
+  parts.brdf = corrected_table(points, grid);
+  parts.name = "instrument-corrected measurement (fitted model " + spec + ")";
+  IssaWriteOptions o;
+  o.weights = luminance_weights(grid.values());
+  o.comment = "instrument-corrected measurement, f = beta/pi; fitted model " + spec;
+  if (!o.weights.empty()) o.comment += "; Monochrome = luminance factor (D65, 10 deg)";
+  write_bsdf_file(path, parts, o);
+}
+
 void add_fit(CLI::App& app) {
   auto* sub = app.add_subcommand(
       "fit", "fit material parameters ('?' in the spec) to measured data through the twin");
@@ -179,7 +256,8 @@ void add_fit(CLI::App& app) {
       ->required();
   o->add_to(*sub);
   sub->add_option("--corrected", *corrected,
-                  "write the instrument-corrected table (CSV: measured × true/virtual per point)");
+                  "write the instrument-corrected table, measured × true/virtual per point: .csv, "
+                  ".bsdf (IS-SA) or .ssdd (a full in-plane grid)");
   sub->callback([o, model, corrected] {
     exit_code() = guarded([&] {
       const auto data = load_measured(o->measured, o->table_u);
@@ -196,16 +274,7 @@ void add_fit(CLI::App& app) {
         auto high = options;
         high.samples = std::max<std::uint64_t>(options.samples, 1u << 16);
         const auto points = correct(data, r.spec, profile, high);
-        if (!corrected->empty()) {
-          const auto dot = corrected->find_last_of('.');
-          const auto ext = dot == std::string::npos ? "" : corrected->substr(dot);
-          if (ext != ".csv")
-            throw Error(Errc::unsupported,
-                        fmt::format("'{}': the corrected table is written as .csv (the "
-                                    "measured geometries are not a tabulated grid)", *corrected),
-                        "corrected");
-          write_corrected_csv(*corrected, points, data.wavelengths);
-        }
+        if (!corrected->empty()) write_corrected(*corrected, points, data.wavelengths, r.spec);
         if (!o->plot.empty()) plot_fit(o->plot, points, "fit: " + r.spec);
       }
       return kExitOk;

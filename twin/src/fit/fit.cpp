@@ -83,6 +83,16 @@ std::vector<double> nominal_beta(const Bsdf& bsdf, const Geometry& g) {
 
 void check_grid(const MeasuredData& data) { data.validate(); }
 
+// Starts the problem at a previous fit's values where they are identifiable and inside.
+void start_from(fit::Problem& problem, const FitResult& previous) {
+  for (std::size_t j = 0; j < problem.params.size(); ++j) {
+    const auto& p = previous.parameters[j];
+    auto& q = problem.params[j];
+    if (!p.identifiable || p.at_bound || !std::isfinite(p.value)) continue;
+    q.start = std::clamp(p.value, q.lo + 1e-3 * (q.hi - q.lo), q.hi - 1e-3 * (q.hi - q.lo));
+  }
+}
+
 nlohmann::json number_or_null(double v) {
   return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
 }
@@ -241,7 +251,9 @@ FitResult fit_material(const MeasuredData& data, std::string_view model,
     const Twin twin(profile, make_bsdf(tmpl.spec(x), grid), reference, grid);
     scatter(geo, twin.predict_many(geo.unique, est, options.threads), 1.0, nullptr, beta, se);
   };
-  // The instrument fit starts where the user said, independently of the naive one.
+  // The naive optimum, when it converged inside the bounds, is a far better start than the
+  // user's guess and costs no virtual measurement: the instrument fit starts there.
+  if (!naive.empty() && naive.front().converged) start_from(problem, naive.front());
   auto r = fit::solve(problem, options);
   r.kind = "fit";
   std::vector<double> x;
@@ -370,6 +382,7 @@ FitResult calibrate(const MeasuredData& data, std::string_view sample_spec,
     }
     scatter(geo, pred, v.gain, &rho, beta, se);
   };
+  if (!naive.empty() && naive.front().converged) start_from(problem, naive.front());
   auto r = fit::solve(problem, options);
   r.kind = "calibrate";
   r.spec = sample->spec();

@@ -158,16 +158,19 @@ struct Functor : Eigen::DenseFunctor<double> {
     return 0;
   }
   int df(const InputType& y, JacobianType& J) const {
-    std::vector<double> scale(ev.n());
-    for (std::size_t j = 0; j < scale.size(); ++j)
-      scale[j] = ev.bounds()[j].dx_dy(y(static_cast<Eigen::Index>(j)));
-    J = ev.jacobian(x_of(y), scale);
+    last_x = x_of(y);
+    last_jx = ev.jacobian(last_x, std::vector<double>(ev.n(), 1.0));
+    J = last_jx;
+    for (std::size_t j = 0; j < ev.n(); ++j)
+      J.col(static_cast<Eigen::Index>(j)) *= ev.bounds()[j].dx_dy(y(static_cast<Eigen::Index>(j)));
     ++jacobians;
     return 0;
   }
   Evaluator& ev;
   const Problem& prob;
   mutable int jacobians = 0;
+  mutable std::vector<double> last_x;  // where the last Jacobian was taken, and it in x
+  mutable Eigen::MatrixXd last_jx;
 };
 
 }  // namespace
@@ -208,7 +211,9 @@ FitResult solve(const Problem& problem, const FitOptions& options) {
   r.chi2 = chi2;
   r.dof = static_cast<long>(m) - static_cast<long>(n);
   r.chi2_per_dof = chi2 / static_cast<double>(r.dof);
-  const Eigen::MatrixXd J = ev.jacobian(x, std::vector<double>(n, 1.0));
+  // The optimiser's last Jacobian is reused when it was taken at the optimum.
+  const Eigen::MatrixXd J =
+      functor.last_x == x ? functor.last_jx : ev.jacobian(x, std::vector<double>(n, 1.0));
   r.evaluations = ev.evaluations();
 
   // Covariance (JᵀJ)⁻¹ through the unit-diagonal information matrix N = D⁻¹JᵀJD⁻¹, whose

@@ -114,7 +114,7 @@ class ModelTemplate {
 struct FitOptions {
   // The twin's budget per evaluation: a fixed sample count (rel_se is not used) and a fixed
   // seed, the same at every evaluation (common random numbers).
-  std::uint64_t samples = 1u << 14;  // paths per geometry, sample + reference (max_samples)
+  std::uint64_t samples = 1u << 13;  // paths per geometry, sample + reference (max_samples)
   int replicates = 16;
   std::uint64_t seed = 1;
   EstimatorKind estimator = EstimatorKind::rqmc;
