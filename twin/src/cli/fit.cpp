@@ -275,7 +275,12 @@ void add_fit(CLI::App& app) {
         high.samples = std::max<std::uint64_t>(options.samples, 1u << 16);
         const auto points = correct(data, r.spec, profile, high);
         if (!corrected->empty()) write_corrected(*corrected, points, data.wavelengths, r.spec);
-        if (!o->plot.empty()) plot_fit(o->plot, points, "fit: " + r.spec);
+        if (!o->plot.empty()) {
+          std::string fitted;
+          for (const auto& p : r.parameters)
+            fitted += fmt::format("{}{} = {:.5g}", fitted.empty() ? "" : ", ", p.name, p.value);
+          plot_fit(o->plot, points, "fit: " + fitted);
+        }
       }
       return kExitOk;
     });

@@ -105,6 +105,9 @@ TEST(FitMaterial, RecoversRoughnessFromIndependentQuadrature) {
   const auto& n = r.naive[0].parameters[0];
   EXPECT_GT(std::abs(n.value - 0.04), 5 * n.u) << "naive " << n.value << " ± " << n.u;
   EXPECT_GT(r.naive[0].chi2_per_dof, 3.0);
+  std::printf("alpha = %.6f ± %.6f (chi2/dof %.3f, %d evaluations); naive %.6f ± %.6f "
+              "(chi2/dof %.2f)\n", a.value, a.u, r.chi2_per_dof, r.evaluations, n.value, n.u,
+              r.naive[0].chi2_per_dof);
 
   const auto j = r.to_json();
   EXPECT_EQ(j["parameters"][0]["name"], "conductor.alpha");
@@ -130,6 +133,10 @@ TEST(Calibrate, RecoversReceiveOffsetAndGain) {
   EXPECT_NEAR(r.profile->arms.receive_offset_deg, -0.2, 0.03);
   EXPECT_NEAR(r.profile->reference_beta, 1.02, 0.01);
   EXPECT_TRUE(r.to_json().contains("profile"));
+  std::printf("receive offset %.4f ± %.4f deg, gain %.5f ± %.5f, rho %.3f, chi2/dof %.3f; "
+              "naive %.4f, %.5f\n", r.parameters[0].value, r.parameters[0].u,
+              r.parameters[1].value, r.parameters[1].u, r.correlation[0][1], r.chi2_per_dof,
+              r.naive[0].parameters[0].value, r.naive[0].parameters[1].value);
 }
 
 // An incidence offset and a sample tilt both move the specular peak: reported, not hidden.
@@ -154,6 +161,7 @@ TEST(Calibrate, ReportsInseparableCombinations) {
     named = named || (w.find("incidence_offset_deg") != std::string::npos &&
                       w.find("sample_tilt_deg") != std::string::npos);
   EXPECT_TRUE(named);
+  for (const auto& w : r.warnings) std::printf("warning: %s\n", w.c_str());
   // The combination the data do fix is still right: the specular peak lies at
   // θr = θi + δi + 2τ (the tilt turns the incidence and the receiving side alike).
   EXPECT_NEAR(r.parameters[0].value + 2 * r.parameters[1].value, 0.1, 0.02);
