@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gonio/proto/error.hpp"
+#include "gonio/proto/point.hpp"
 #include "gonio/twin/fit.hpp"
 #include "ideal_instrument.hpp"
 
@@ -83,6 +84,22 @@ TEST(Measured, CsvColumnsByName) {
                    "theta_i,phi_i,theta_r,phi_r,wavelength_nm,measured,measured_u\n"
                    "45,0,10,0,400,0.5,0\n", "zero-u.csv"),
                Error);
+}
+
+TEST(Measured, JsonExportPoints) {
+  PointRecord a;
+  a.planned = Geometry::in_plane(45, 30);
+  a.actual = a.planned;
+  a.measured = Spectrum(WavelengthGrid::parse("400,500"), {0.5, 0.6}, {0.01, 0.02});
+  PointRecord b = a;
+  b.index = 1;
+  b.planned = Geometry::in_plane(45, 40);
+  const nlohmann::json j{{"scan", nlohmann::json::object()}, {"points", {a, b}}};
+  const auto d = measured_from_json(j, "scan.json");
+  ASSERT_EQ(d.points.size(), 2u);
+  EXPECT_DOUBLE_EQ(d.points[1].geometry.theta_r, 40);
+  EXPECT_DOUBLE_EQ(d.points[0].u[1], 0.02);
+  EXPECT_THROW((void)measured_from_json(nlohmann::json::object(), "bad.json"), Error);
 }
 
 // The headline accuracy target: a GGX conductor α = 0.04 measured by the ideal instrument
