@@ -14,6 +14,9 @@ pkg_check_modules(MODBUS REQUIRED IMPORTED_TARGET libmodbus)
 pkg_check_modules(LIBUSB REQUIRED IMPORTED_TARGET libusb-1.0)
 pkg_check_modules(SYSTEMD REQUIRED IMPORTED_TARGET libsystemd)
 pkg_check_modules(CAIRO REQUIRED IMPORTED_TARGET cairo)
+# Levenberg–Marquardt of the inverse twin (gonio-twin fit / calibrate): Eigen's unsupported
+# LevenbergMarquardt module, header-only.
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
 
 if(GONIO_BUILD_TESTS)
   find_package(GTest REQUIRED)

@@ -56,5 +56,7 @@ void add_error_map(CLI::App& app);
 void add_plan(CLI::App& app);
 void add_render(CLI::App& app);
 void add_convert(CLI::App& app);
+void add_fit(CLI::App& app);
+void add_calibrate(CLI::App& app);
 
 }  // namespace gonio::twin::cli

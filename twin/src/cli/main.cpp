@@ -16,6 +16,8 @@ int main(int argc, char** argv) {
   add_plan(app);
   add_render(app);
   add_convert(app);
+  add_fit(app);
+  add_calibrate(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,290 @@
+// gonio-twin fit: material parameters fitted through the virtual instrument (twin/fitting.md).
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <algorithm>
+#include <array>
+#include <map>
+#include <set>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "cli/common.hpp"
+#include "cli/fit_output.hpp"
+#include "cli/output.hpp"
+#include "gonio/proto/error.hpp"
+#include "gonio/twin/bsdf_io.hpp"
+#include "gonio/twin/color.hpp"
+#include "gonio/twin/plot.hpp"
+
+namespace gonio::twin::cli {
+
+void FitCliOptions::add_to(CLI::App& app) {
+  app.add_option("--measured", measured,
+                 "measured data: goniod's scan export (.csv or .json) or a tabulated BSDF "
+                 "(.bsdf IS-SA, .ssdd)")
+      ->required();
+  app.add_option("--profile", profile, "instrument profile: preset name or JSON file")
+      ->capture_default_str();
+  app.add_option("--calibration", calibration,
+                 "override the profile's calibration: per-geometry or fixed")
+      ->check(CLI::IsMember({"per-geometry", "fixed"}));
+  app.add_option("--samples", fit.samples,
+                 "twin paths per geometry and evaluation (sample + reference), fixed")
+      ->capture_default_str();
+  app.add_option("--replicates", fit.replicates, "independent randomisations (standard error)")
+      ->capture_default_str();
+  app.add_option("--seed", fit.seed, "random seed, the same at every evaluation")
+      ->capture_default_str();
+  app.add_option("--threads", fit.threads, "worker threads (0: all cores)")->capture_default_str();
+  app.add_option("--max-iterations", fit.max_iterations, "Levenberg–Marquardt iterations")
+      ->capture_default_str();
+  app.add_option("--table-u", table_u,
+                 "relative standard uncertainty given to tabulated input (tables carry none)")
+      ->capture_default_str();
+  app.add_flag("--no-naive", no_naive, "skip the comparison fit at the nominal directions");
+  app.add_flag("--json", json, "JSON result");
+  app.add_option("--plot", plot, "plot: measured, fitted virtual and true β, residuals "
+                                 "(.png, .svg, .pdf)");
+}
+
+FitOptions FitCliOptions::options() const {
+  auto o = fit;
+  o.naive = !no_naive;
+  o.validate();
+  return o;
+}
+
+InstrumentProfile FitCliOptions::load_profile() const {
+  auto p = InstrumentProfile::load(profile);
+  if (calibration == "fixed") p.calibration.mode = CalibrationMode::fixed;
+  if (calibration == "per-geometry") p.calibration.mode = CalibrationMode::per_geometry;
+  return p;
+}
+
+void write_fit_table(std::ostream& out, const FitResult& r, const std::string& title) {
+  out << title << '\n';
+  const bool naive = !r.naive.empty();
+  out << fmt::format("{:<28} {:>13} {:>11}{}\n", "parameter", "value", "u",
+                     naive ? fmt::format(" {:>13}", "naive") : "");
+  for (std::size_t j = 0; j < r.parameters.size(); ++j) {
+    const auto& p = r.parameters[j];
+    const auto u = std::isfinite(p.u) ? fmt::format("{:11.4g}", p.u) : fmt::format("{:>11}", "—");
+    std::string nv;
+    if (naive) nv = fmt::format(" {:13.6g}", r.naive.front().parameters[j].value);
+    out << fmt::format("{:<28} {:13.6g} {}{}{}\n", p.name, p.value, u, nv,
+                       p.identifiable ? "" : "  (not identifiable)");
+  }
+  if (r.parameters.size() > 1 && r.parameters.size() <= 8) {
+    out << "correlation\n";
+    for (const auto& row : r.correlation) {
+      out << " ";
+      for (double v : row) out << fmt::format(" {:6.3f}", v);
+      out << '\n';
+    }
+  }
+  out << fmt::format("chi2/dof {:.4g} ({} dof), {} points, {} residuals, {} iterations, {} "
+                     "evaluations, {:.2f} s, {}\n",
+                     r.chi2_per_dof, r.dof, r.points, r.residuals, r.iterations, r.evaluations,
+                     r.seconds, r.status);
+  if (naive)
+    out << fmt::format("naive fit (nominal directions, no instrument): chi2/dof {:.4g}\n",
+                       r.naive.front().chi2_per_dof);
+  for (const auto& w : r.warnings) out << "warning: " << w << '\n';
+}
+
+void plot_fit(const std::string& path, const std::vector<CorrectedPoint>& points,
+              const std::string& title) {
+  std::map<double, std::vector<const CorrectedPoint*>> by_incidence;
+  for (const auto& p : points) by_incidence[p.geometry.theta_i].push_back(&p);
+  Figure fig;
+  fig.title = title;
+  fig.width = 1000;
+  fig.height = 750;
+  fig.panels.reserve(2);
+  Panel& beta = fig.panels.emplace_back();
+  beta.x = Axis("receiving angle θr", "°");
+  bool positive = true;
+  for (const auto& p : points)
+    for (double v : p.measured) positive = positive && v > 0;
+  beta.y = Axis("radiance factor β (channel mean)").logarithmic(positive);
+  beta.height_ratio = 2;
+  Panel& res = fig.panels.emplace_back();
+  res.x = Axis("receiving angle θr", "°");
+  res.y = Axis("(virtual − measured) / u");
+  res.y_reference_lines = {0};
+  res.legend = LegendPlacement::none;
+  const auto mean = [](const std::vector<double>& v) { return channel_mean(v); };
+  std::size_t k = 0;
+  for (auto& [ti, list] : by_incidence) {
+    std::sort(list.begin(), list.end(), [](const auto* a, const auto* b) {
+      return a->geometry.theta_r < b->geometry.theta_r;
+    });
+    std::vector<double> x, m, mu, v, t, z;
+    for (const auto* p : list) {
+      x.push_back(p->geometry.theta_r);
+      m.push_back(mean(p->measured));
+      mu.push_back(mean(p->measured_u));
+      v.push_back(mean(p->virtual_beta));
+      t.push_back(mean(p->true_beta));
+      double zz = 0;
+      for (std::size_t c = 0; c < p->measured.size(); ++c) {
+        const double s = std::hypot(p->measured_u[c], p->virtual_se[c]);
+        zz += s > 0 ? (p->virtual_beta[c] - p->measured[c]) / s : 0;
+      }
+      z.push_back(zz / static_cast<double>(std::max<std::size_t>(1, p->measured.size())));
+    }
+    const auto color = palette_color(k++);
+    auto& sm = beta.series.emplace_back(fmt::format("θi = {:g}° measured ± u", ti), x, m, mu);
+    sm.color = color;
+    sm.line = LineStyle::none;
+    sm.marker = Marker::circle;
+    sm.marker_size = 4;
+    auto& sv = beta.series.emplace_back(fmt::format("θi = {:g}° fitted, virtual", ti), x, v);
+    sv.color = color;
+    auto& st = beta.series.emplace_back(fmt::format("θi = {:g}° fitted, true", ti), x, t);
+    st.color = color;
+    st.line = LineStyle::dashed;
+    auto& sz = res.series.emplace_back("", x, z);
+    sz.color = color;
+    sz.line = LineStyle::none;
+    sz.marker = Marker::circle;
+    sz.marker_size = 4;
+  }
+  write_figure(fig, path);
+}
+
+void write_corrected_csv(const std::string& path, const std::vector<CorrectedPoint>& points,
+                         const WavelengthGrid& grid) {
+  std::ofstream out(path);
+  if (!out) throw Error(Errc::io_error, fmt::format("cannot write '{}'", path), "corrected");
+  out << "theta_i,phi_i,theta_r,phi_r,wavelength_nm,measured,measured_u,virtual,virtual_se,"
+         "true,corrected,corrected_u\n";
+  for (const auto& p : points)
+    for (std::size_t c = 0; c < grid.size(); ++c)
+      out << fmt::format("{:g},{:g},{:g},{:g},{:g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},"
+                         "{:.9g}\n",
+                         p.geometry.theta_i, p.geometry.phi_i, p.geometry.theta_r,
+                         p.geometry.phi_r, grid[c], p.measured[c], p.measured_u[c],
+                         p.virtual_beta[c], p.virtual_se[c], p.true_beta[c], p.corrected[c],
+                         p.corrected_u[c]);
+  if (!out) throw Error(Errc::io_error, fmt::format("cannot write '{}'", path), "corrected");
+}
+
+// The corrected values as an isotropic spherical BRDF table (f = β/π): θi and |θr| nodes of
+// the in-plane reflection points, φo = 0 (θr < 0) and 180 (θr > 0), repeats averaged. The
+// points must fill the grid, as for goniod's tabulated exports.
+BsdfTable corrected_table(const std::vector<CorrectedPoint>& points, const WavelengthGrid& grid) {
+  std::set<double> ti, to, sides;
+  std::map<std::array<double, 3>, std::pair<std::vector<double>, int>> cells;
+  for (const auto& p : points) {
+    const auto& g = p.geometry;
+    if (!g.in_measurement_plane() || g.is_transmission())
+      throw Error(Errc::unsupported,
+                  fmt::format("{} is not an in-plane reflection geometry: write the corrected "
+                              "table as .csv", g.to_string()),
+                  "corrected");
+    std::vector<double> here;
+    if (g.theta_r > 0) here = {180.0};
+    else if (g.theta_r < 0) here = {0.0};
+    else here = {0.0, 180.0};
+    ti.insert(g.theta_i);
+    to.insert(std::abs(g.theta_r));
+    for (double side : here) {
+      sides.insert(side);
+      auto& cell = cells[{g.theta_i, std::abs(g.theta_r), side}];
+      if (cell.first.empty()) cell.first.assign(grid.size(), 0.0);
+      for (std::size_t c = 0; c < grid.size(); ++c)
+        cell.first[c] += std::max(0.0, p.corrected[c]) / kPi;
+      ++cell.second;
+    }
+  }
+  const std::vector<double> p0(ti.begin(), ti.end()), p2(to.begin(), to.end()),
+      p3(sides.begin(), sides.end());
+  std::vector<double> values(p0.size() * p2.size() * p3.size() * grid.size());
+  for (std::size_t i3 = 0; i3 < p3.size(); ++i3)
+    for (std::size_t i2 = 0; i2 < p2.size(); ++i2)
+      for (std::size_t i0 = 0; i0 < p0.size(); ++i0) {
+        const auto it = cells.find({p0[i0], p2[i2], p3[i3]});
+        if (it == cells.end())
+          throw Error(Errc::unsupported,
+                      fmt::format("the points are not a full grid: none at θi = {:g}°, θr = "
+                                  "{:g}°; write the corrected table as .csv",
+                                  p0[i0], p3[i3] > 90 ? p2[i2] : -p2[i2]),
+                      "corrected");
+        const std::size_t base = ((i3 * p2.size() + i2) * p0.size() + i0) * grid.size();
+        for (std::size_t c = 0; c < grid.size(); ++c)
+          values[base + c] = it->second.first[c] / it->second.second;
+      }
+  BsdfTable::Axes axes;
+  axes.p0 = p0;
+  axes.p2 = p2;
+  axes.p3 = p3;
+  return BsdfTable(TableParam::spherical, std::move(axes), grid.values(), std::move(values),
+                   TableReduction{true, false});
+}
+
+void write_corrected(const std::string& path, const std::vector<CorrectedPoint>& points,
+                     const WavelengthGrid& grid, const std::string& spec) {
+  const auto dot = path.find_last_of('.');
+  std::string ext = dot == std::string::npos ? "" : path.substr(dot);
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".csv") return write_corrected_csv(path, points, grid);
+  if (ext != ".bsdf" && ext != ".ssdd")
+    throw Error::invalid("corrected", fmt::format("'{}': write .csv, .bsdf (IS-SA) or .ssdd", path));
+  TabulatedParts parts;
+  parts.brdf = corrected_table(points, grid);
+  parts.name = "instrument-corrected measurement (fitted model " + spec + ")";
+  IssaWriteOptions o;
+  o.weights = luminance_weights(grid.values());
+  o.comment = "instrument-corrected measurement, f = beta/pi; fitted model " + spec;
+  if (!o.weights.empty()) o.comment += "; Monochrome = luminance factor (D65, 10 deg)";
+  write_bsdf_file(path, parts, o);
+}
+
+void add_fit(CLI::App& app) {
+  auto* sub = app.add_subcommand(
+      "fit", "fit material parameters ('?' in the spec) to measured data through the twin");
+  auto o = std::make_shared<FitCliOptions>();
+  auto model = std::make_shared<std::string>();
+  auto corrected = std::make_shared<std::string>();
+  sub->add_option("--model", *model,
+                  "BSDF spec with free parameters: 'conductor:alpha=?,eta=0.2,k=3.9', "
+                  "alpha=?0.1[0.001,1], albedo=?* (per channel)")
+      ->required();
+  o->add_to(*sub);
+  sub->add_option("--corrected", *corrected,
+                  "write the instrument-corrected table, measured × true/virtual per point: .csv, "
+                  ".bsdf (IS-SA) or .ssdd (a full in-plane grid)");
+  sub->callback([o, model, corrected] {
+    exit_code() = guarded([&] {
+      const auto data = load_measured(o->measured, o->table_u);
+      const auto profile = o->load_profile();
+      const auto options = o->options();
+      const auto r = fit_material(data, *model, profile, options);
+      if (o->json)
+        std::cout << r.to_json().dump(2) << '\n';
+      else
+        write_fit_table(std::cout, r,
+                        fmt::format("fit of {} to {} through the {} twin", *model, data.source,
+                                    profile.name));
+      if (!corrected->empty() || !o->plot.empty()) {
+        auto high = options;
+        high.samples = std::max<std::uint64_t>(options.samples, 1u << 16);
+        const auto points = correct(data, r.spec, profile, high);
+        if (!corrected->empty()) write_corrected(*corrected, points, data.wavelengths, r.spec);
+        if (!o->plot.empty()) {
+          std::string fitted;
+          for (const auto& p : r.parameters)
+            fitted += fmt::format("{}{} = {:.5g}", fitted.empty() ? "" : ", ", p.name, p.value);
+          plot_fit(o->plot, points, "fit: " + fitted);
+        }
+      }
+      return kExitOk;
+    });
+  });
+}
+
+}  // namespace gonio::twin::cli

@@ -1,0 +1,38 @@
+// What `gonio-twin fit` and `gonio-twin calibrate` share: the budget options of the inverse
+// twin, the human table of a fit result, the instrument-corrected table and the plot.
+#pragma once
+
+#include <ostream>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "gonio/twin/fit.hpp"
+
+namespace gonio::twin::cli {
+
+struct FitCliOptions {
+  std::string measured;
+  std::string profile = "gcms4";
+  std::string calibration;
+  double table_u = 0.01;
+  FitOptions fit;
+  bool no_naive = false;
+  bool json = false;
+  std::string plot;
+
+  void add_to(CLI::App& app);
+  FitOptions options() const;
+  InstrumentProfile load_profile() const;
+};
+
+void write_fit_table(std::ostream& out, const FitResult& r, const std::string& title);
+// Measured ± u, the fitted virtual measurement, the fitted true β and the normalised
+// residuals, per incidence angle over θr (channel means).
+void plot_fit(const std::string& path, const std::vector<CorrectedPoint>& points,
+              const std::string& title);
+// CSV: one row per point and wavelength (geometry, measured, virtual, true, corrected).
+void write_corrected_csv(const std::string& path, const std::vector<CorrectedPoint>& points,
+                         const WavelengthGrid& grid);
+
+}  // namespace gonio::twin::cli

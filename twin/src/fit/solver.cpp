@@ -1,0 +1,309 @@
+// Levenberg–Marquardt on the weighted residuals (Eigen's unsupported module, a port of
+// MINPACK's lmder: Moré 1978), the covariance from the Gauss–Newton approximation of the
+// Hessian, and the identifiability analysis.
+//
+// Bounds: each parameter is fitted through x = lo + (hi − lo)(1 + sin y)/2 (in log x for
+// log-scale parameters), the transformation MINUIT uses for bounded parameters (James &
+// Roos 1975), so every trial point is inside its bounds. The covariance is computed in x
+// at the optimum, from a Jacobian taken there.
+//
+// Jacobian: forward differences with steps of a few 1e-3 of the value. The virtual
+// measurement uses the same random numbers at every evaluation (common random numbers), so
+// its Monte Carlo error is a fixed, smooth function of the parameters and such steps give
+// derivatives far less noisy than the standard error itself.
+#include "fit/solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+#include <unsupported/Eigen/LevenbergMarquardt>
+
+#include "gonio/proto/error.hpp"
+
+namespace gonio::twin::fit {
+namespace {
+
+struct Bounded {
+  double lo, hi;
+  bool log;
+  double a() const { return log ? std::log(lo) : lo; }
+  double b() const { return log ? std::log(hi) : hi; }
+  double to_x(double y) const {
+    const double t = 0.5 * (1 + std::sin(y));
+    const double v = a() + (b() - a()) * t;
+    return std::clamp(log ? std::exp(v) : v, lo, hi);
+  }
+  double dx_dy(double y) const {
+    const double dt = 0.5 * std::cos(y);
+    return (b() - a()) * dt * (log ? to_x(y) : 1.0);
+  }
+  double to_y(double x) const {
+    const double v = log ? std::log(x) : x;
+    const double s = std::clamp(2 * (v - a()) / (b() - a()) - 1, -1.0, 1.0);
+    return std::asin(s);
+  }
+  // Forward-difference step in x, pointing inward near the upper bound.
+  double step(double x) const {
+    double h = log ? 3e-3 * x : std::max(3e-3 * std::abs(x), 1e-3 * (hi - lo));
+    if (x + h > hi) h = -h;
+    return h;
+  }
+};
+
+std::string status_text(Eigen::LevenbergMarquardtSpace::Status s) {
+  using namespace Eigen::LevenbergMarquardtSpace;
+  switch (s) {
+    case RelativeReductionTooSmall: return "converged: relative reduction of chi2 below tolerance";
+    case RelativeErrorTooSmall: return "converged: relative change of parameters below tolerance";
+    case RelativeErrorAndReductionTooSmall: return "converged: parameters and chi2 both stable";
+    case CosinusTooSmall: return "converged: residuals orthogonal to the Jacobian";
+    case TooManyFunctionEvaluation: return "stopped: iteration limit reached";
+    case FtolTooSmall: return "stopped: chi2 tolerance too small to improve further";
+    case XtolTooSmall: return "stopped: parameter tolerance too small to improve further";
+    case GtolTooSmall: return "stopped: gradient tolerance too small to improve further";
+    case ImproperInputParameters: return "failed: improper input";
+    default: return "stopped";
+  }
+}
+
+bool converged_status(Eigen::LevenbergMarquardtSpace::Status s) {
+  using namespace Eigen::LevenbergMarquardtSpace;
+  return s == RelativeReductionTooSmall || s == RelativeErrorTooSmall ||
+         s == RelativeErrorAndReductionTooSmall || s == CosinusTooSmall || s == FtolTooSmall ||
+         s == XtolTooSmall || s == GtolTooSmall;
+}
+
+class Evaluator {
+ public:
+  explicit Evaluator(const Problem& p) : p_(p) {
+    for (const auto& q : p.params) bounds_.push_back({q.lo, q.hi, q.log_scale});
+  }
+  std::size_t n() const { return p_.params.size(); }
+  std::size_t m() const { return p_.measured.size(); }
+  const std::vector<Bounded>& bounds() const { return bounds_; }
+  int evaluations() const { return evaluations_; }
+
+  struct State {
+    std::vector<double> x, beta, se, sigma;
+  };
+  // The model at x, cached for the last point asked for.
+  const State& at(const std::vector<double>& x) {
+    if (!cache_.x.empty() && cache_.x == x) return cache_;
+    cache_ = compute(x);
+    return cache_;
+  }
+  State compute(const std::vector<double>& x) {
+    State s;
+    s.x = x;
+    p_.evaluate(x, s.beta, s.se);
+    ++evaluations_;
+    if (s.beta.size() != m() || s.se.size() != m())
+      throw Error(Errc::internal, "the model returned the wrong number of values");
+    s.sigma.resize(m());
+    for (std::size_t i = 0; i < m(); ++i) {
+      s.sigma[i] = std::sqrt(p_.u[i] * p_.u[i] + s.se[i] * s.se[i]);
+      if (!std::isfinite(s.beta[i]))
+        throw Error(Errc::internal, fmt::format("the model gave a non-finite β at residual {}", i));
+    }
+    return s;
+  }
+  // Jacobian of the weighted residuals in x (scale[j] = dx/dy turns it into y).
+  Eigen::MatrixXd jacobian(const std::vector<double>& x, const std::vector<double>& scale) {
+    const State base = at(x);
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m()),
+                                              static_cast<Eigen::Index>(n()));
+    const int groups = n() == 0 ? 0 : *std::max_element(p_.group.begin(), p_.group.end()) + 1;
+    for (int g = 0; g < groups; ++g) {
+      auto xp = x;
+      std::vector<double> h(n(), 0.0);
+      for (std::size_t j = 0; j < n(); ++j)
+        if (p_.group[j] == g) xp[j] += (h[j] = bounds_[j].step(x[j]));
+      const State moved = compute(xp);
+      for (std::size_t i = 0; i < m(); ++i) {
+        const int c = static_cast<int>(i % p_.channels);
+        for (std::size_t j = 0; j < n(); ++j) {
+          if (p_.group[j] != g || (p_.channel[j] >= 0 && p_.channel[j] != c)) continue;
+          J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
+              (moved.beta[i] - base.beta[i]) / (h[j] * base.sigma[i]) * scale[j];
+        }
+      }
+    }
+    return J;
+  }
+
+ private:
+  const Problem& p_;
+  std::vector<Bounded> bounds_;
+  State cache_;
+  int evaluations_ = 0;
+};
+
+struct Functor : Eigen::DenseFunctor<double> {
+  Functor(Evaluator& e, const Problem& p)
+      : Eigen::DenseFunctor<double>(static_cast<int>(e.n()), static_cast<int>(e.m())), ev(e),
+        prob(p) {}
+  std::vector<double> x_of(const InputType& y) const {
+    std::vector<double> x(ev.n());
+    for (std::size_t j = 0; j < x.size(); ++j)
+      x[j] = ev.bounds()[j].to_x(y(static_cast<Eigen::Index>(j)));
+    return x;
+  }
+  int operator()(const InputType& y, ValueType& f) const {
+    const auto& s = ev.at(x_of(y));
+    for (std::size_t i = 0; i < ev.m(); ++i)
+      f(static_cast<Eigen::Index>(i)) = (s.beta[i] - prob.measured[i]) / s.sigma[i];
+    return 0;
+  }
+  int df(const InputType& y, JacobianType& J) const {
+    last_x = x_of(y);
+    last_jx = ev.jacobian(last_x, std::vector<double>(ev.n(), 1.0));
+    J = last_jx;
+    for (std::size_t j = 0; j < ev.n(); ++j)
+      J.col(static_cast<Eigen::Index>(j)) *= ev.bounds()[j].dx_dy(y(static_cast<Eigen::Index>(j)));
+    ++jacobians;
+    return 0;
+  }
+  Evaluator& ev;
+  const Problem& prob;
+  mutable int jacobians = 0;
+  mutable std::vector<double> last_x;  // where the last Jacobian was taken, and it in x
+  mutable Eigen::MatrixXd last_jx;
+};
+
+}  // namespace
+
+FitResult solve(const Problem& problem, const FitOptions& options) {
+  Evaluator ev(problem);
+  const std::size_t n = ev.n(), m = ev.m();
+  if (n == 0) throw Error::invalid("model", "no free parameter");
+  if (m <= n)
+    throw Error::invalid("measured", fmt::format("{} measured values cannot determine {} "
+                                                 "parameters", m, n));
+  Functor functor(ev, problem);
+  Eigen::VectorXd y(static_cast<Eigen::Index>(n));
+  for (std::size_t j = 0; j < n; ++j)
+    y(static_cast<Eigen::Index>(j)) = ev.bounds()[j].to_y(problem.params[j].start);
+
+  Eigen::LevenbergMarquardt<Functor> lm(functor);
+  lm.setXtol(options.tolerance);
+  lm.setFtol(options.tolerance);
+  lm.setMaxfev(static_cast<Eigen::Index>(options.max_iterations) * 2);
+  const auto status = lm.minimize(y);
+
+  FitResult r;
+  r.iterations = functor.jacobians;
+  r.status = status_text(status);
+  r.converged = converged_status(status);
+  if (!r.converged) r.warnings.push_back("the optimiser did not converge: " + r.status);
+
+  // The optimum in x, its χ², and the Jacobian there.
+  std::vector<double> x(n);
+  for (std::size_t j = 0; j < n; ++j) x[j] = ev.bounds()[j].to_x(y(static_cast<Eigen::Index>(j)));
+  const auto state = ev.at(x);
+  double chi2 = 0;
+  for (std::size_t i = 0; i < m; ++i) {
+    const double z = (state.beta[i] - problem.measured[i]) / state.sigma[i];
+    chi2 += z * z;
+  }
+  r.chi2 = chi2;
+  r.dof = static_cast<long>(m) - static_cast<long>(n);
+  r.chi2_per_dof = chi2 / static_cast<double>(r.dof);
+  // The optimiser's last Jacobian is reused when it was taken at the optimum.
+  const Eigen::MatrixXd J =
+      functor.last_x == x ? functor.last_jx : ev.jacobian(x, std::vector<double>(n, 1.0));
+  r.evaluations = ev.evaluations();
+
+  // Covariance (JᵀJ)⁻¹ through the unit-diagonal information matrix N = D⁻¹JᵀJD⁻¹, whose
+  // small eigenvalues are the directions the data do not constrain.
+  const Eigen::MatrixXd info = J.transpose() * J;
+  Eigen::VectorXd d(static_cast<Eigen::Index>(n));
+  for (Eigen::Index j = 0; j < d.size(); ++j) d(j) = info(j, j) > 0 ? std::sqrt(info(j, j)) : 0;
+  Eigen::MatrixXd N = Eigen::MatrixXd::Identity(d.size(), d.size());
+  for (Eigen::Index a = 0; a < d.size(); ++a)
+    for (Eigen::Index b = 0; b < d.size(); ++b)
+      if (d(a) > 0 && d(b) > 0) N(a, b) = info(a, b) / (d(a) * d(b));
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(N);
+  const Eigen::VectorXd lambda = eig.eigenvalues();
+  const Eigen::MatrixXd V = eig.eigenvectors();
+  constexpr double kFlat = 1e-9;
+  Eigen::MatrixXd Ninv = Eigen::MatrixXd::Zero(d.size(), d.size());
+  std::vector<bool> flat_param(n, false);
+  for (Eigen::Index k = 0; k < lambda.size(); ++k) {
+    if (lambda(k) > kFlat * static_cast<double>(n)) {
+      Ninv += V.col(k) * V.col(k).transpose() / lambda(k);
+    } else {
+      for (Eigen::Index j = 0; j < d.size(); ++j)
+        if (std::abs(V(j, k)) > 0.1) flat_param[static_cast<std::size_t>(j)] = true;
+    }
+  }
+  for (std::size_t j = 0; j < n; ++j)
+    if (d(static_cast<Eigen::Index>(j)) == 0) flat_param[j] = true;
+  const double scale = std::max(1.0, r.chi2_per_dof);
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(d.size(), d.size());
+  for (Eigen::Index a = 0; a < d.size(); ++a)
+    for (Eigen::Index b = 0; b < d.size(); ++b)
+      if (d(a) > 0 && d(b) > 0) cov(a, b) = scale * Ninv(a, b) / (d(a) * d(b));
+
+  r.correlation.assign(n, std::vector<double>(n, 0.0));
+  for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t b = 0; b < n; ++b) {
+      const auto A = static_cast<Eigen::Index>(a), B = static_cast<Eigen::Index>(b);
+      const double den = std::sqrt(cov(A, A) * cov(B, B));
+      r.correlation[a][b] = a == b ? 1.0 : (den > 0 ? cov(A, B) / den : 0.0);
+    }
+  }
+
+  for (std::size_t j = 0; j < n; ++j) {
+    const auto& p = problem.params[j];
+    FittedParameter fp;
+    fp.name = p.name;
+    fp.value = x[j];
+    fp.start = p.start, fp.lo = p.lo, fp.hi = p.hi;
+    const double t = 0.5 * (1 + std::sin(y(static_cast<Eigen::Index>(j))));
+    fp.at_bound = t < 1e-6 || t > 1 - 1e-6;
+    fp.identifiable = !flat_param[j];
+    const double var = cov(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j));
+    fp.u = flat_param[j] ? std::numeric_limits<double>::quiet_NaN() : std::sqrt(var);
+    if (fp.at_bound)
+      r.warnings.push_back(fmt::format("{} = {:g} lies on a bound of [{:g}, {:g}]: its "
+                                       "uncertainty does not describe the fit", p.name,
+                                       fp.value, p.lo, p.hi));
+    if (flat_param[j])
+      r.warnings.push_back(fmt::format("{} is not identifiable: the data do not constrain it "
+                                       "(a flat direction of chi2)", p.name));
+    r.parameters.push_back(fp);
+  }
+  for (std::size_t a = 0; a < n; ++a)
+    for (std::size_t b = a + 1; b < n; ++b)
+      if (std::abs(r.correlation[a][b]) > options.correlation_limit &&
+          !flat_param[a] && !flat_param[b]) {
+        r.parameters[a].identifiable = r.parameters[b].identifiable = false;
+        r.warnings.push_back(fmt::format("{} and {} are correlated (rho = {:.3f}): the data "
+                                         "hardly separate them", problem.params[a].name,
+                                         problem.params[b].name, r.correlation[a][b]));
+      }
+  // Directions along which χ² hardly changes, in parameters scaled by their information.
+  for (Eigen::Index k = 0; k < lambda.size(); ++k) {
+    if (lambda(k) >= 1 - options.correlation_limit || n < 2) continue;
+    Degeneracy dg;
+    dg.eigenvalue = std::max(0.0, lambda(k));
+    for (Eigen::Index j = 0; j < d.size(); ++j)
+      if (std::abs(V(j, k)) > 0.05)
+        dg.combination.emplace_back(problem.params[static_cast<std::size_t>(j)].name, V(j, k));
+    if (dg.combination.size() >= 2) {
+      std::string text;
+      for (const auto& [name, c] : dg.combination)
+        text += fmt::format("{}{:+.2f}·{}", text.empty() ? "" : " ", c, name);
+      r.warnings.push_back(fmt::format("the data cannot separate the combination {} "
+                                       "(eigenvalue {:.2g} of the normalised information)",
+                                       text, dg.eigenvalue));
+    }
+    r.degenerate.push_back(std::move(dg));
+  }
+  return r;
+}
+
+}  // namespace gonio::twin::fit

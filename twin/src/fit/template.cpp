@@ -1,0 +1,198 @@
+// ModelTemplate: a BSDF spec with '?' marks for free parameters.
+//
+// The marks are cut out of the text and replaced by distinct sentinel numbers; the spec
+// parser of the bsdf family then tells which lobe and key (or which wavelength:value pair)
+// each sentinel landed in, so the template follows the spec syntax exactly without a second
+// parser. The models' parameter tables give the default start and bounds.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <optional>
+
+#include <fmt/format.h>
+
+#include "bsdf/model.hpp"
+#include "bsdf/spec.hpp"
+#include "gonio/proto/error.hpp"
+#include "gonio/proto/text.hpp"
+#include "gonio/twin/fit.hpp"
+
+namespace gonio::twin {
+namespace {
+
+constexpr std::size_t kMaxMarks = 99;
+
+// A number no one writes in a spec, distinct per mark, read back exactly.
+std::string sentinel_text(std::size_t k) { return fmt::format("-1.2345e+{}", 200 + k); }
+double sentinel_value(std::size_t k) { return std::stod(sentinel_text(k)); }
+
+struct RawMark {
+  bool per_channel = false;
+  std::optional<double> start;
+  std::optional<std::pair<double, double>> bounds;
+};
+
+bool number_char(std::string_view s, std::size_t i) {
+  const char c = s[i];
+  if ((c >= '0' && c <= '9') || c == '.' || c == 'e' || c == 'E') return true;
+  if (c == '-') return true;
+  // '+' belongs to the number only as an exponent sign ("1e+3"); else it joins lobes.
+  return c == '+' && i > 0 && (s[i - 1] == 'e' || s[i - 1] == 'E');
+}
+
+}  // namespace
+
+ModelTemplate::ModelTemplate(std::string_view spec, const WavelengthGrid& grid)
+    : text_(spec), grid_(grid) {
+  if (grid.empty()) throw Error::invalid("wavelengths", "a model needs at least one wavelength");
+  // 1. Cut the marks out of the text.
+  std::vector<RawMark> raw;
+  std::string substituted;
+  std::string literal;
+  for (std::size_t i = 0; i < spec.size();) {
+    if (spec[i] != '?') {
+      literal += spec[i++];
+      continue;
+    }
+    if (raw.size() == kMaxMarks)
+      throw Error::invalid("model", fmt::format("more than {} '?' marks", kMaxMarks));
+    const std::size_t at = i++;
+    RawMark m;
+    if (i < spec.size() && spec[i] == '*') m.per_channel = true, ++i;
+    std::size_t j = i;
+    while (j < spec.size() && number_char(spec, j)) ++j;
+    const auto field = fmt::format("model (mark {} at offset {})", raw.size() + 1, at);
+    if (j > i) m.start = text::parse_double(field, spec.substr(i, j - i));
+    i = j;
+    if (i < spec.size() && spec[i] == '[') {
+      const auto close = spec.find(']', i);
+      if (close == std::string_view::npos)
+        throw Error::invalid(field, "'[' without ']': bounds are written [lo,hi]");
+      const auto parts = text::split(spec.substr(i + 1, close - i - 1), ',');
+      if (parts.size() != 2) throw Error::invalid(field, "bounds are written [lo,hi]");
+      const double lo = text::parse_double(field, text::trim(parts[0]));
+      const double hi = text::parse_double(field, text::trim(parts[1]));
+      if (!(lo < hi)) throw Error::invalid(field, fmt::format("bounds [{:g},{:g}] are empty", lo, hi));
+      m.bounds = std::pair{lo, hi};
+      i = close + 1;
+    }
+    literal_.push_back(literal);
+    substituted += literal + sentinel_text(raw.size());
+    literal.clear();
+    raw.push_back(m);
+  }
+  literal_.push_back(literal);
+  substituted += literal;
+  if (raw.empty())
+    throw Error::invalid("model", "no free parameter: mark at least one value with '?' "
+                                  "(e.g. conductor:alpha=?,eta=0.2,k=3.9)");
+
+  // 2. Find where each sentinel landed.
+  const auto lobes = bsdf::parse_spec_string(substituted);
+  std::map<std::string, int> name_count;
+  for (const auto& l : lobes) ++name_count[l.name];
+  std::map<std::string, int> name_seen;
+  struct Found {
+    std::string name;             // parameter name without a wavelength
+    const bsdf::ParamInfo* info = nullptr;
+    std::optional<double> pair_nm;  // the mark is the value of this pair
+    bool found = false;
+  };
+  std::vector<Found> found(raw.size());
+  for (const auto& l : lobes) {
+    const int n = ++name_seen[l.name];
+    if (l.name.empty()) continue;  // a tabulated file has no parameters
+    const auto* model = bsdf::find_model(l.name);
+    const auto lobe_name = name_count[l.name] > 1 ? fmt::format("{}#{}", l.name, n) : l.name;
+    for (const auto& [key, value] : l.args) {
+      const auto locate = [&](double v, std::optional<double> nm) {
+        for (std::size_t k = 0; k < raw.size(); ++k) {
+          if (v != sentinel_value(k)) continue;
+          if (model == nullptr)
+            throw Error::invalid("model", fmt::format("unknown lobe '{}'", l.name));
+          const auto it = std::find_if(model->params.begin(), model->params.end(),
+                                       [&](const bsdf::ParamInfo& p) { return p.key == key; });
+          if (it == model->params.end())
+            throw Error::invalid(fmt::format("bsdf.{}.{}", l.name, key),
+                                 fmt::format("unknown key '{}' for lobe '{}'", key, l.name));
+          found[k] = {lobe_name + "." + key, &*it, nm, true};
+        }
+      };
+      if (value.kind == bsdf::RawValue::Kind::number) locate(value.number, std::nullopt);
+      if (value.kind == bsdf::RawValue::Kind::pairs)
+        for (const auto& [nm, v] : value.pairs) locate(v, nm);
+    }
+  }
+
+  // 3. The free parameters, with their starts and bounds.
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    const auto& m = raw[k];
+    const auto& f = found[k];
+    if (!f.found)
+      throw Error::invalid("model", fmt::format("the '?' mark {} is not the value of a "
+                                                "parameter (write key=?)", k + 1));
+    const auto& p = *f.info;
+    const auto field = "bsdf." + f.name;
+    if ((m.per_channel || f.pair_nm) && !p.spectral)
+      throw Error::invalid(field, "is a scalar parameter: it cannot be free per wavelength");
+    if (m.per_channel && f.pair_nm)
+      throw Error::invalid(field, "'?*' stands for a whole spectrum, not for one pair's value");
+    double lo = p.lo_open ? (p.lo == 0 ? p.hi * 1e-4 : p.lo + 1e-9 * (p.hi - p.lo)) : p.lo;
+    double hi = p.hi;
+    if (m.bounds) {
+      if (m.bounds->first < lo || m.bounds->second > hi)
+        throw Error(Errc::out_of_range,
+                    fmt::format("{}: bounds [{:g},{:g}] leave the parameter's range [{:g},{:g}]",
+                                field, m.bounds->first, m.bounds->second, p.lo, p.hi),
+                    field);
+      lo = m.bounds->first, hi = m.bounds->second;
+    }
+    double start = m.start.value_or(p.fallback);
+    if (m.start && (start < lo || start > hi))
+      throw Error::out_of_range(field, start, lo, hi);
+    // A start on a bound would sit where the bounded transform is flat: move it inside.
+    start = std::clamp(start, lo + 1e-3 * (hi - lo), hi - 1e-3 * (hi - lo));
+    FreeParameter fp{f.name, start, lo, hi, lo > 0 && hi / lo >= 10};
+    Mark mark{params_.size(), m.per_channel ? grid_.size() : 1};
+    if (m.per_channel) {
+      for (std::size_t c = 0; c < grid_.size(); ++c) {
+        auto q = fp;
+        q.name = fmt::format("{}@{:g}", f.name, grid_[c]);
+        params_.push_back(q);
+        channel_.push_back(static_cast<int>(c));
+      }
+    } else {
+      if (f.pair_nm) fp.name = fmt::format("{}@{:g}", f.name, *f.pair_nm);
+      params_.push_back(fp);
+      channel_.push_back(-1);
+    }
+    marks_.push_back(mark);
+  }
+  // The template must build at its start values.
+  std::vector<double> start;
+  for (const auto& p : params_) start.push_back(p.start);
+  (void)make_bsdf(this->spec(start), grid_);
+}
+
+std::string ModelTemplate::spec(const std::vector<double>& values) const {
+  if (values.size() != params_.size())
+    throw Error(Errc::internal, fmt::format("{} values for {} free parameters", values.size(),
+                                            params_.size()));
+  std::string out;
+  for (std::size_t k = 0; k < marks_.size(); ++k) {
+    out += literal_[k];
+    const auto& m = marks_[k];
+    if (m.count == 1 && channel_[m.first] < 0) {
+      out += text::format_number(values[m.first]);
+      continue;
+    }
+    for (std::size_t c = 0; c < m.count; ++c) {
+      if (c > 0) out += ',';
+      out += text::format_number(grid_[c]) + ":" + text::format_number(values[m.first + c]);
+    }
+  }
+  out += literal_.back();
+  return out;
+}
+
+}  // namespace gonio::twin
