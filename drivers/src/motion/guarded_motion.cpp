@@ -31,9 +31,9 @@ MotionCapabilities GuardedMotion::capabilities() const { return inner_->capabili
 
 std::vector<Axis> GuardedMotion::axes() const { return inner_->axes(); }
 
-void GuardedMotion::move(Axis axis, double target_deg, milliseconds timeout) {
+milliseconds GuardedMotion::check_path(Axis axis, double target_deg, milliseconds timeout,
+                                       const char* what) {
   const auto deadline = Clock::now() + timeout;
-  guard_.check_limits(axis, target_deg);
   const auto other = other_arm(axis);
   if (other && guard_.min_separation_deg() > 0 && inner_->has_axis(axis) &&
       inner_->has_axis(*other)) {
@@ -44,18 +44,28 @@ void GuardedMotion::move(Axis axis, double target_deg, milliseconds timeout) {
   const auto left = std::chrono::duration_cast<milliseconds>(deadline - Clock::now());
   if (left.count() <= 0)
     throw Error(Errc::timeout,
-                fmt::format("{}: no time left for the move to {:g}° after reading the arm "
+                fmt::format("{}: no time left for the {} to {:g}° after reading the arm "
                             "positions ({} ms)",
-                            axis_name(axis), target_deg, timeout.count()),
-                std::string(axis_name(axis)));
-  inner_->move(axis, target_deg, left);
+                            to_text(axis), what, target_deg, timeout.count()),
+                std::string(to_text(axis)));
+  return left;
+}
+
+void GuardedMotion::move(Axis axis, double target_deg, milliseconds timeout) {
+  guard_.check_limits(axis, target_deg);
+  inner_->move(axis, target_deg, check_path(axis, target_deg, timeout, "move"));
 }
 
 double GuardedMotion::position(Axis axis, milliseconds timeout) { return inner_->position(axis, timeout); }
 
 AxisStatus GuardedMotion::status(Axis axis, milliseconds timeout) { return inner_->status(axis, timeout); }
 
-void GuardedMotion::home(Axis axis, milliseconds timeout) { inner_->home(axis, timeout); }
+void GuardedMotion::home(Axis axis, milliseconds timeout) {
+  if (const auto end = inner_->home_position(axis)) timeout = check_path(axis, *end, timeout, "homing");
+  inner_->home(axis, timeout);
+}
+
+std::optional<double> GuardedMotion::home_position(Axis axis) const { return inner_->home_position(axis); }
 
 void GuardedMotion::reset_alarm(Axis axis, milliseconds timeout) { inner_->reset_alarm(axis, timeout); }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,7 +37,7 @@ class FakeMotion final : public MotionController {
   MotionCapabilities capabilities() const override { return {false, true, false}; }
   std::vector<Axis> axes() const override { return axes_; }
   void move(Axis a, double target, std::chrono::milliseconds timeout) override {
-    calls.push_back("move " + std::string(axis_name(a)) + " " + std::to_string(static_cast<int>(target)));
+    calls.push_back("move " + std::string(gonio::to_text(a)) + " " + std::to_string(static_cast<int>(target)));
     last_timeout = timeout;
     pos[a] = target;
   }
@@ -45,17 +46,18 @@ class FakeMotion final : public MotionController {
     return pos.at(a);
   }
   AxisStatus status(Axis a, std::chrono::milliseconds) override {
-    calls.push_back("status " + std::string(axis_name(a)));
+    calls.push_back("status " + std::string(gonio::to_text(a)));
     AxisStatus s;
     s.position_deg = pos.at(a);
     return s;
   }
   void home(Axis a, std::chrono::milliseconds) override {
-    calls.push_back("home " + std::string(axis_name(a)));
-    pos[a] = 0;
+    calls.push_back("home " + std::string(gonio::to_text(a)));
+    pos[a] = home_at.value_or(0);
   }
+  std::optional<double> home_position(Axis) const override { return home_at; }
   void reset_alarm(Axis a, std::chrono::milliseconds) override {
-    calls.push_back("reset_alarm " + std::string(axis_name(a)));
+    calls.push_back("reset_alarm " + std::string(gonio::to_text(a)));
   }
   void stop(std::chrono::milliseconds) override { calls.push_back("stop"); }
 
@@ -63,6 +65,7 @@ class FakeMotion final : public MotionController {
   std::vector<std::string> calls;
   int position_reads = 0;
   std::chrono::milliseconds last_timeout{0};
+  std::optional<double> home_at;  // known to the controller, or not
 
  private:
   std::vector<Axis> axes_;
@@ -197,6 +200,25 @@ TEST(GuardedMotion, EverythingElsePassesThrough) {
   EXPECT_DOUBLE_EQ(motion->guard().min_separation_deg(), 10);
   EXPECT_EQ(*motion->guard().limits(Axis::incidence), (SoftLimits{0, 85}));
   EXPECT_EQ(&motion->inner(), fake);
+}
+
+TEST(GuardedMotion, HomingIsPathCheckedWhereTheControllerKnowsItsEnd) {
+  MotionLimits l;
+  l.min_separation = 10;
+  auto [fake, motion] = make(l);
+  fake->pos[Axis::incidence] = 40;
+  fake->pos[Axis::receive] = 20;
+  // Homing the receive arm to −40° would sweep it through the source arm (at 40°).
+  fake->home_at = -40;
+  const auto e = error_of([&] { motion->home(Axis::receive, 1s); });
+  EXPECT_EQ(e.code(), Errc::limit_violation);
+  EXPECT_EQ(e.field(), "receive");
+  EXPECT_TRUE(fake->calls.empty());
+  // Homing to 0° keeps 40° of clearance: it reaches the controller.
+  fake->home_at = 0;
+  motion->home(Axis::receive, 1s);
+  EXPECT_EQ(fake->calls, (std::vector<std::string>{"home receive"}));
+  EXPECT_EQ(motion->home_position(Axis::receive), 0.0);
 }
 
 TEST(GuardedMotion, NeedsAController) {

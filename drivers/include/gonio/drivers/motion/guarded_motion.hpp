@@ -7,9 +7,11 @@
 // separation and the wrapped controller drives both arms — when the path from the arm's
 // current position to the target sweeps the arms closer than the minimum separation. The
 // current positions are read back from the wrapped controller before every arm move, so
-// the check holds whoever else moved the arms. Everything else (axes, capabilities,
-// position, status, home, reset_alarm, stop) passes through unchanged; the time spent
-// reading positions counts against the move's timeout.
+// the check holds whoever else moved the arms. Homing is checked the same way when the
+// wrapped controller knows where homing ends (home_position(); soft limits are not applied
+// to it, so an axis beyond them can always be brought home). Everything else (axes,
+// capabilities, position, status, reset_alarm, stop) passes through unchanged; the time
+// spent reading positions counts against the move's timeout.
 #pragma once
 
 #include <memory>
@@ -33,10 +35,14 @@ class GuardedMotion final : public MotionController {
   double position(Axis axis, milliseconds timeout) override;
   AxisStatus status(Axis axis, milliseconds timeout) override;
   void home(Axis axis, milliseconds timeout) override;
+  std::optional<double> home_position(Axis axis) const override;
   void reset_alarm(Axis axis, milliseconds timeout) override;
   void stop(milliseconds timeout) override;
 
  private:
+  // The arm collision check of `axis` going to `target_deg`; returns the time left.
+  milliseconds check_path(Axis axis, double target_deg, milliseconds timeout, const char* what);
+
   std::unique_ptr<MotionController> inner_;
   MotionGuard guard_;
 };
