@@ -43,15 +43,7 @@ struct LabConfig {
 namespace {
 
 int fault_index(json_util::ObjectReader& r, const char* key) {
-  const int n = r.optional<int>(key, 0);
-  if (n < 0 || n > 1000000) throw Error::out_of_range(r.path(key), n, 0, 1000000);
-  return n;
-}
-
-double bounded(json_util::ObjectReader& r, const char* key, double fallback, double lo, double hi) {
-  const double v = r.optional<double>(key, fallback);
-  if (!(v >= lo && v <= hi)) throw Error::out_of_range(r.path(key), v, lo, hi);
-  return v;
+  return r.optional_in<int>(key, 0, 0, 1000000);
 }
 
 LabConfig read_config(const nlohmann::json& j) {
@@ -63,25 +55,25 @@ LabConfig read_config(const nlohmann::json& j) {
     c.grid = WavelengthGrid::parse(r.required<std::string>("wavelengths"), r.path("wavelengths"));
   if (const auto* a = r.raw("arm_offsets_deg"); a != nullptr) {
     json_util::ObjectReader ar(*a, r.path("arm_offsets_deg"));
-    c.profile.arms.incidence_offset_deg = bounded(ar, "incidence", 0, -10, 10);
-    c.profile.arms.receive_offset_deg = bounded(ar, "receive", 0, -10, 10);
+    c.profile.arms.incidence_offset_deg = ar.optional_in<double>("incidence", 0, -10, 10);
+    c.profile.arms.receive_offset_deg = ar.optional_in<double>("receive", 0, -10, 10);
     ar.finish();
   }
-  c.lamp_drift_per_s = bounded(r, "lamp_drift_per_s", 0, -0.1, 0.1);
-  c.gain = bounded(r, "gain_counts_per_ms", c.gain, 0, 1e9);
-  c.dark = bounded(r, "dark_counts_per_ms", c.dark, 0, 1e9);
-  c.read_noise = bounded(r, "read_noise_counts", c.read_noise, 0, 1e9);
-  c.full_scale = bounded(r, "full_scale_counts", c.full_scale, 1, 1e15);
-  c.integration_ms = bounded(r, "integration_ms", c.integration_ms, 0.01, 60000);
-  c.speed_deg_s = bounded(r, "speed_deg_s", c.speed_deg_s, 0.01, 1000);
-  c.time_scale = bounded(r, "time_scale", c.time_scale, 0, 10);
+  c.lamp_drift_per_s = r.optional_in<double>("lamp_drift_per_s", 0, -0.1, 0.1);
+  c.gain = r.optional_in<double>("gain_counts_per_ms", c.gain, 0, 1e9);
+  c.dark = r.optional_in<double>("dark_counts_per_ms", c.dark, 0, 1e9);
+  c.read_noise = r.optional_in<double>("read_noise_counts", c.read_noise, 0, 1e9);
+  c.full_scale = r.optional_in<double>("full_scale_counts", c.full_scale, 1, 1e15);
+  c.integration_ms = r.optional_in<double>("integration_ms", c.integration_ms, 0.01, 60000);
+  c.speed_deg_s = r.optional_in<double>("speed_deg_s", c.speed_deg_s, 0.01, 1000);
+  c.time_scale = r.optional_in<double>("time_scale", c.time_scale, 0, 10);
   c.seed = r.optional<std::uint64_t>("seed", c.seed);
   c.estimator.rel_se = 1e-2;
   c.estimator.max_samples = 1u << 16;
   c.estimator.replicates = 8;
   if (const auto* e = r.raw("estimator"); e != nullptr) {
     json_util::ObjectReader er(*e, r.path("estimator"));
-    c.estimator.rel_se = bounded(er, "rel_se", c.estimator.rel_se, 1e-6, 1);
+    c.estimator.rel_se = er.optional_in<double>("rel_se", c.estimator.rel_se, 1e-6, 1);
     c.estimator.max_samples = er.optional<std::uint64_t>("max_samples", c.estimator.max_samples);
     c.estimator.replicates = er.optional<int>("replicates", c.estimator.replicates);
     er.finish();
@@ -95,7 +87,7 @@ LabConfig read_config(const nlohmann::json& j) {
     c.faults.garbage_at_point = fault_index(fr, "garbage_at_point");
     c.faults.saturate_at_point = fault_index(fr, "saturate_at_point");
     c.faults.stall_at_move = fault_index(fr, "stall_at_move");
-    c.faults.timeout_wait = milliseconds(static_cast<long long>(bounded(fr, "timeout_wait_ms", 200, 0, 600000)));
+    c.faults.timeout_wait = milliseconds(static_cast<long long>(fr.optional_in<double>("timeout_wait_ms", 200, 0, 600000)));
     fr.finish();
   }
   r.finish();
@@ -161,12 +153,12 @@ class Lab {
         lock.unlock();
         sleep_interruptible(timeout);
         throw Error(Errc::timeout, fmt::format("mock {}: move to {:g}° did not finish in {} ms",
-                                               axis_name(a), target, timeout.count()));
+                                               to_text(a), target, timeout.count()));
       }
       lock.unlock();
       sleep_interruptible(std::chrono::duration_cast<milliseconds>(real));
       lock.lock();
-      if (stop_) throw Error(Errc::invalid_state, fmt::format("mock {}: move stopped", axis_name(a)));
+      if (stop_) throw Error(Errc::invalid_state, fmt::format("mock {}: move stopped", to_text(a)));
     }
     clock_s_ += seconds;
     pos_[axis_index(a)] = dest;
@@ -174,7 +166,7 @@ class Lab {
       alarm_[axis_index(a)] = 0x10;
       throw Error(Errc::device_alarm,
                   fmt::format("mock {}: alarm 0x10 (excessive position deviation): stalled at {:g}° "
-                              "on the way to {:g}°", axis_name(a), dest, target));
+                              "on the way to {:g}°", to_text(a), dest, target));
     }
   }
 
@@ -337,6 +329,7 @@ class MockMotion final : public MotionController {
   double position(Axis a, milliseconds) override { return lab_->position(a); }
   AxisStatus status(Axis a, milliseconds) override { return lab_->status(a); }
   void home(Axis a, milliseconds timeout) override { lab_->home(a, timeout); }
+  std::optional<double> home_position(Axis) const override { return 0.0; }  // Lab::home
   void reset_alarm(Axis a, milliseconds) override { lab_->reset_alarm(a); }
   void stop(milliseconds) override { lab_->stop(); }
 

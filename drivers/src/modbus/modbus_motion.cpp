@@ -75,7 +75,7 @@ class ModbusMotion final : public MotionController {
     const auto deadline = Clock::now() + timeout;
     auto& st = axis_state(axis);
     const AxisConfig& a = *st.cfg;
-    const std::string name(axis_name(axis));
+    const std::string name(to_text(axis));
     if (!std::isfinite(target_deg))
       throw Error(Errc::limit_violation,
                   fmt::format("{}: target {} is not a finite angle", name, target_deg), name);
@@ -144,10 +144,17 @@ class ModbusMotion final : public MotionController {
     return to_status(st, raw);
   }
 
+  // Homing ends at device position 0 (the motion guard checks the path there).
+  std::optional<double> home_position(Axis axis) const override {
+    const auto& st = state_[static_cast<std::size_t>(axis)];
+    if (!st.cfg) return std::nullopt;
+    return st.cfg->scale.to_degrees(0);
+  }
+
   void home(Axis axis, milliseconds timeout) override {
     const auto deadline = Clock::now() + timeout;
     auto& st = axis_state(axis);
-    const std::string name(axis_name(axis));
+    const std::string name(to_text(axis));
     const auto generation = stop_generation_.load();
     check_ready(st, name, poll(st, deadline));
     const auto& m = st.cfg->map;
@@ -165,7 +172,7 @@ class ModbusMotion final : public MotionController {
   void reset_alarm(Axis axis, milliseconds timeout) override {
     const auto deadline = Clock::now() + timeout;
     auto& st = axis_state(axis);
-    const std::string name(axis_name(axis));
+    const std::string name(to_text(axis));
     const auto& m = st.cfg->map;
     // ALM-RST acts on its rising edge; hold it until the alarm clears (or briefly).
     pulse_input(st, name, m.input.alarm_reset, deadline, std::nullopt,
@@ -227,8 +234,8 @@ class ModbusMotion final : public MotionController {
     auto& st = state_[static_cast<std::size_t>(axis)];
     if (!st.cfg)
       throw Error(Errc::unsupported,
-                  fmt::format("{}: this Modbus controller has no such axis", axis_name(axis)),
-                  std::string(axis_name(axis)));
+                  fmt::format("{}: this Modbus controller has no such axis", to_text(axis)),
+                  std::string(to_text(axis)));
     return st;
   }
 
@@ -327,7 +334,7 @@ class ModbusMotion final : public MotionController {
       st.link->write(st.cfg->unit, st.cfg->map.input_command, std::array{mask(st.cfg->map.input.stop)}, d);
       st.link->write(st.cfg->unit, st.cfg->map.input_command, std::array<std::uint16_t, 1>{0}, d);
     } catch (const Error& e) {
-      spdlog::warn("modbus {}: could not stop after a failed move: {}", axis_name(st.cfg->axis), e.what());
+      spdlog::warn("modbus {}: could not stop after a failed move: {}", to_text(st.cfg->axis), e.what());
     }
   }
 

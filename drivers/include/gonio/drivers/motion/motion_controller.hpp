@@ -1,6 +1,6 @@
-// MotionController — the arms and sample stage of the goniometer (DESIGN §4).
+// MotionController — the arms and sample stage of the goniometer (docs/architecture.md §4).
 //
-// Four named axes, all in degrees in the sample frame of DESIGN §2:
+// Four named axes, all in degrees in the sample frame of docs/architecture.md §2:
 //   incidence  θi, the source arm
 //   receive    θr, the receiver arm (signed: θr = θi is specular, θr = −θi retro-reflection)
 //   rotation   sample rotation about its normal (azimuth)
@@ -34,6 +34,8 @@
 #include <string_view>
 #include <vector>
 
+#include "gonio/proto/enum_text.hpp"
+
 namespace gonio::drivers {
 
 using std::chrono::milliseconds;
@@ -43,10 +45,13 @@ enum class Axis : std::uint8_t { incidence, receive, rotation, tilt };
 inline constexpr std::array<Axis, 4> kAllAxes{Axis::incidence, Axis::receive, Axis::rotation,
                                                Axis::tilt};
 
-std::string_view axis_name(Axis a) noexcept;  // "incidence", "receive", "rotation", "tilt"
-std::optional<Axis> axis_from_name(std::string_view name) noexcept;
-// As axis_from_name, but throws Error(invalid_argument) naming `field` and the known names.
-Axis parse_axis(std::string_view field, std::string_view name);
+inline constexpr EnumNames<Axis, 4> kAxisNames{{
+    {Axis::incidence, "incidence"},
+    {Axis::receive, "receive"},
+    {Axis::rotation, "rotation"},
+    {Axis::tilt, "tilt"},
+}};
+constexpr const auto& enum_names(Axis) { return kAxisNames; }  // proto/enum_text.hpp
 
 struct AxisStatus {
   bool ready = false;        // accepts a motion command (no alarm, not moving, energised)
@@ -90,6 +95,12 @@ class MotionController {
   virtual AxisStatus status(Axis axis, milliseconds timeout) = 0;
   // Runs the axis's homing sequence and waits until it completes.
   virtual void home(Axis axis, milliseconds timeout) = 0;
+  // Where homing leaves `axis`, in degrees, when the controller knows it; the motion guard
+  // checks the path there like a move's. Empty: unknown (homing is then not path-checked).
+  virtual std::optional<double> home_position(Axis axis) const {
+    (void)axis;
+    return std::nullopt;
+  }
   // Clears a latched alarm; throws Error(device_alarm) if the alarm persists.
   virtual void reset_alarm(Axis axis, milliseconds timeout) = 0;
 
