@@ -41,24 +41,9 @@ json node_to_json(const toml::node& n) {
   return json(os.str());
 }
 
-double number_in(ObjectReader& r, const std::string& key, double fallback, double lo, double hi) {
-  const double v = r.optional<double>(key, fallback);
-  if (!(v >= lo && v <= hi)) throw Error::out_of_range(r.path(key), v, lo, hi);
-  return v;
-}
-
-long long integer_in(ObjectReader& r, const std::string& key, long long fallback, long long lo,
-                     long long hi) {
-  const auto v = r.optional<long long>(key, fallback);
-  if (v < lo || v > hi)
-    throw Error::out_of_range(r.path(key), static_cast<double>(v), static_cast<double>(lo),
-                              static_cast<double>(hi));
-  return v;
-}
-
 milliseconds seconds_in(ObjectReader& r, const std::string& key, milliseconds fallback,
                         double lo_s, double hi_s) {
-  const double s = number_in(r, key, static_cast<double>(fallback.count()) / 1000.0, lo_s, hi_s);
+  const double s = r.optional_in(key, static_cast<double>(fallback.count()) / 1000.0, lo_s, hi_s);
   return milliseconds(static_cast<long long>(s * 1000.0 + 0.5));
 }
 
@@ -78,22 +63,11 @@ json table(ObjectReader& r, const std::string& key) {
 
 }  // namespace
 
-std::string_view role_name(Role r) noexcept {
-  switch (r) {
-    case Role::none: return "none";
-    case Role::viewer: return "viewer";
-    case Role::technician: return "technician";
-    case Role::admin: return "admin";
-  }
-  return "none";
-}
-
 Role parse_role(std::string_view text, std::string_view field) {
-  if (text == "viewer") return Role::viewer;
-  if (text == "technician") return Role::technician;
-  if (text == "admin") return Role::admin;
-  throw Error::invalid(std::string(field),
-                       fmt::format("'{}' is not a role (allowed: viewer, technician, admin)", text));
+  // "none" names the absence of a role; it is never granted.
+  if (text == to_text(Role::none))
+    throw Error::invalid(std::string(field), "'none' is not a role to grant (viewer, technician, admin)");
+  return parse_enum<Role>(text, field);
 }
 
 ListenUri ListenUri::parse(std::string_view text, std::string_view field) {
@@ -200,17 +174,17 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
       }
     }
     c.allow_remote = r.optional<bool>("allow_remote", c.allow_remote);
-    c.io_threads = static_cast<int>(integer_in(r, "io_threads", c.io_threads, 1, 64));
-    c.rpc_threads = static_cast<std::size_t>(integer_in(r, "rpc_threads", static_cast<long long>(c.rpc_threads), 1, 64));
+    c.io_threads = static_cast<int>(r.optional_in<long long>("io_threads", c.io_threads, 1, 64));
+    c.rpc_threads = static_cast<std::size_t>(r.optional_in<long long>("rpc_threads", static_cast<long long>(c.rpc_threads), 1, 64));
     c.max_message_bytes = static_cast<std::size_t>(
-        integer_in(r, "max_message_bytes", static_cast<long long>(c.max_message_bytes), 1024,
+        r.optional_in<long long>("max_message_bytes", static_cast<long long>(c.max_message_bytes), 1024,
                    64ll << 20));
     c.read_timeout = seconds_in(r, "read_timeout_s", c.read_timeout, 0.1, 3600);
     c.idle_timeout = seconds_in(r, "idle_timeout_s", c.idle_timeout, 0, 86400);
     c.max_queue = static_cast<std::size_t>(
-        integer_in(r, "max_queue", static_cast<long long>(c.max_queue), 1, 1 << 20));
+        r.optional_in<long long>("max_queue", static_cast<long long>(c.max_queue), 1, 1 << 20));
     c.max_connections = static_cast<std::size_t>(
-        integer_in(r, "max_connections", static_cast<long long>(c.max_connections), 1, 65536));
+        r.optional_in<long long>("max_connections", static_cast<long long>(c.max_connections), 1, 65536));
     c.log_level = r.optional<std::string>("log_level", c.log_level);
     if (c.log_level != "trace" && c.log_level != "debug" && c.log_level != "info" &&
         c.log_level != "warn" && c.log_level != "error")
@@ -271,7 +245,7 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
     c.settle = seconds_in(r, "settle_s", c.settle, 0, 60);
     c.auto_resume = r.optional<bool>("auto_resume", c.auto_resume);
     c.auto_resume_delay = seconds_in(r, "auto_resume_delay_s", c.auto_resume_delay, 0, 86400);
-    c.max_auto_resumes = static_cast<int>(integer_in(r, "max_auto_resumes", c.max_auto_resumes, 0, 1000));
+    c.max_auto_resumes = static_cast<int>(r.optional_in<long long>("max_auto_resumes", c.max_auto_resumes, 0, 1000));
     if (const auto* lim = r.raw("limits")) {
       ObjectReader l(*lim, "instrument.limits");
       const auto pair = [&](const std::string& key, double& lo, double& hi, double min, double max) {
@@ -289,7 +263,7 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
       pair("receive", c.limits.receive_min, c.limits.receive_max, -180, 180);
       pair("rotation", c.limits.rotation_min, c.limits.rotation_max, -360, 360);
       pair("tilt", c.limits.tilt_min, c.limits.tilt_max, -360, 360);
-      if (l.has("min_separation")) c.limits.min_separation = number_in(l, "min_separation", 0, 0, 179);
+      if (l.has("min_separation")) c.limits.min_separation = l.optional_in<double>("min_separation", 0, 0, 179);
       l.finish();
     }
     r.finish();
@@ -297,23 +271,23 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
 
   if (const json twin = table(top, "twin"); !twin.empty()) {
     ObjectReader r(twin, "twin");
-    c.twin_threads = static_cast<unsigned>(integer_in(r, "threads", c.twin_threads, 0, 256));
-    c.twin_rel_se = number_in(r, "rel_se", c.twin_rel_se, 1e-5, 0.5);
+    c.twin_threads = static_cast<unsigned>(r.optional_in<long long>("threads", c.twin_threads, 0, 256));
+    c.twin_rel_se = r.optional_in<double>("rel_se", c.twin_rel_se, 1e-5, 0.5);
     c.twin_max_samples = static_cast<std::uint64_t>(
-        integer_in(r, "max_samples", static_cast<long long>(c.twin_max_samples), 1024, 1ll << 34));
-    c.twin_replicates = static_cast<int>(integer_in(r, "replicates", c.twin_replicates, 4, 1024));
+        r.optional_in<long long>("max_samples", static_cast<long long>(c.twin_max_samples), 1024, 1ll << 34));
+    c.twin_replicates = static_cast<int>(r.optional_in<long long>("replicates", c.twin_replicates, 4, 1024));
     c.twin_seed = static_cast<std::uint64_t>(
-        integer_in(r, "seed", static_cast<long long>(c.twin_seed), 0, (1ll << 62)));
+        r.optional_in<long long>("seed", static_cast<long long>(c.twin_seed), 0, (1ll << 62)));
     r.finish();
   }
 
   if (const json div = table(top, "divergence"); !div.empty()) {
     ObjectReader r(div, "divergence");
-    c.z_threshold = number_in(r, "z_threshold", c.z_threshold, 0.5, 100);
-    c.delta_e_threshold = number_in(r, "delta_e_threshold", c.delta_e_threshold, 0.1, 100);
-    c.sustained_m = static_cast<int>(integer_in(r, "sustained_m", c.sustained_m, 1, 1000));
-    c.sustained_n = static_cast<int>(integer_in(r, "sustained_n", c.sustained_n, 1, 1000));
-    c.reference_drift = number_in(r, "reference_drift", c.reference_drift, 0.001, 1);
+    c.z_threshold = r.optional_in<double>("z_threshold", c.z_threshold, 0.5, 100);
+    c.delta_e_threshold = r.optional_in<double>("delta_e_threshold", c.delta_e_threshold, 0.1, 100);
+    c.sustained_m = static_cast<int>(r.optional_in<long long>("sustained_m", c.sustained_m, 1, 1000));
+    c.sustained_n = static_cast<int>(r.optional_in<long long>("sustained_n", c.sustained_n, 1, 1000));
+    c.reference_drift = r.optional_in<double>("reference_drift", c.reference_drift, 0.001, 1);
     c.pause_on_sustained = r.optional<bool>("pause_on_sustained", c.pause_on_sustained);
     r.finish();
   }
@@ -321,7 +295,7 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
   if (const json hook = table(top, "webhook"); !hook.empty()) {
     ObjectReader r(hook, "webhook");
     c.webhook_url = r.optional<std::string>("url", c.webhook_url);
-    c.webhook_retries = static_cast<int>(integer_in(r, "retries", c.webhook_retries, 0, 100));
+    c.webhook_retries = static_cast<int>(r.optional_in<long long>("retries", c.webhook_retries, 0, 100));
     c.webhook_backoff = seconds_in(r, "backoff_s", c.webhook_backoff, 0.01, 3600);
     c.webhook_timeout = seconds_in(r, "timeout_s", c.webhook_timeout, 0.1, 600);
     c.webhook_min_severity = r.optional<std::string>("min_severity", c.webhook_min_severity);

@@ -18,10 +18,8 @@ std::int64_t read_id(ObjectReader& r, const std::string& key) {
 
 std::size_t read_count(ObjectReader& r, const std::string& key, std::size_t fallback,
                        std::size_t max) {
-  const auto v = r.optional<long long>(key, static_cast<long long>(fallback));
-  if (v < 0 || static_cast<unsigned long long>(v) > max)
-    throw Error::out_of_range(r.path(key), static_cast<double>(v), 0, static_cast<double>(max));
-  return static_cast<std::size_t>(v);
+  return static_cast<std::size_t>(r.optional_in<long long>(key, static_cast<long long>(fallback), 0,
+                                                           static_cast<long long>(max)));
 }
 
 std::size_t read_offset(ObjectReader& r) {
@@ -53,7 +51,7 @@ Scan require_scan(const Store& store, std::int64_t id) {
 std::string actor(const rpc::Call& c) { return c.principal.name; }
 
 json principal_json(const Principal& p) {
-  return json{{"name", p.name}, {"role", role_name(p.role)}, {"transport", p.transport}};
+  return json{{"name", p.name}, {"role", to_text(p.role)}, {"transport", p.transport}};
 }
 
 json scan_summary(const Scan& s) { return to_json(s, false); }

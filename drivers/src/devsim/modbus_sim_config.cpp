@@ -18,23 +18,11 @@ std::optional<SimFault> read_fault(ObjectReader& parent, const std::string& key,
   if (j == nullptr) return std::nullopt;
   ObjectReader r(*j, parent.path(key));
   SimFault f;
-  f.move = static_cast<int>(r.required<long long>("move"));
-  if (f.move < 1 || f.move > 1000000) throw Error::out_of_range(r.path("move"), f.move, 1, 1000000);
-  f.fraction = r.optional<double>("fraction", 0.5);
-  if (!(f.fraction >= 0 && f.fraction <= 1)) throw Error::out_of_range(r.path("fraction"), f.fraction, 0, 1);
-  if (alarm) {
-    const auto code = r.optional<long long>("code", 0x30);
-    if (code < 1 || code > 0xFFFF) throw Error::out_of_range(r.path("code"), static_cast<double>(code), 1, 65535);
-    f.code = static_cast<std::uint32_t>(code);
-  }
+  f.move = static_cast<int>(r.required_in<long long>("move", 1, 1000000));
+  f.fraction = r.optional_in("fraction", 0.5, 0.0, 1.0);
+  if (alarm) f.code = static_cast<std::uint32_t>(r.optional_in<long long>("code", 0x30, 1, 0xFFFF));
   r.finish();
   return f;
-}
-
-double read_range(ObjectReader& r, const std::string& key, double fallback, double lo, double hi) {
-  const double v = r.optional<double>(key, fallback);
-  if (!(v >= lo && v <= hi)) throw Error::out_of_range(r.path(key), v, lo, hi);
-  return v;
 }
 
 }  // namespace
@@ -45,9 +33,7 @@ ModbusSimConfig ModbusSimConfig::from_json(const nlohmann::json& j) {
   if (const auto* t = r.raw("tcp")) {
     ObjectReader tr(*t, "tcp");
     c.tcp_host = tr.optional<std::string>("host", "127.0.0.1");
-    const auto port = tr.optional<long long>("port", 0);
-    if (port < 0 || port > 65535) throw Error::out_of_range(tr.path("port"), static_cast<double>(port), 0, 65535);
-    c.tcp_port = static_cast<int>(port);
+    c.tcp_port = static_cast<int>(tr.optional_in<long long>("port", 0, 0, 65535));
     tr.finish();
   }
   c.rtu = r.optional<bool>("rtu", false);
@@ -64,17 +50,15 @@ ModbusSimConfig ModbusSimConfig::from_json(const nlohmann::json& j) {
     const std::string ctx = fmt::format("units[{}]", i);
     ObjectReader ur((*units)[i], ctx);
     SimAxisConfig a;
-    const auto unit = ur.required<long long>("unit");
-    if (unit < 1 || unit > 247) throw Error::out_of_range(ur.path("unit"), static_cast<double>(unit), 1, 247);
-    a.unit = static_cast<int>(unit);
+    a.unit = static_cast<int>(ur.required_in<long long>("unit", 1, 247));
     for (const auto& other : c.units)
       if (other.unit == a.unit)
         throw Error::invalid(ur.path("unit"), fmt::format("unit {} appears twice", a.unit));
-    a.position_steps = static_cast<std::int32_t>(read_range(ur, "position_steps", 0, -2147483647.0, 2147483647.0));
-    a.in_position_band_steps = read_range(ur, "in_position_band_steps", 2, 0, 1e6);
-    a.home_position_steps = static_cast<std::int32_t>(read_range(ur, "home_position_steps", 0, -2147483647.0, 2147483647.0));
-    a.home_speed_hz = read_range(ur, "home_speed_hz", 20000, 1, 1e7);
-    a.home_accel_hz_s = read_range(ur, "home_accel_hz_s", 200000, 1, 1e9);
+    a.position_steps = static_cast<std::int32_t>(ur.optional_in<double>("position_steps", 0, -2147483647.0, 2147483647.0));
+    a.in_position_band_steps = ur.optional_in<double>("in_position_band_steps", 2, 0, 1e6);
+    a.home_position_steps = static_cast<std::int32_t>(ur.optional_in<double>("home_position_steps", 0, -2147483647.0, 2147483647.0));
+    a.home_speed_hz = ur.optional_in<double>("home_speed_hz", 20000, 1, 1e7);
+    a.home_accel_hz_s = ur.optional_in<double>("home_accel_hz_s", 200000, 1, 1e9);
     a.alarm_at_move = read_fault(ur, "alarm_at_move", true);
     a.stall_at_move = read_fault(ur, "stall_at_move", false);
     ur.finish();

@@ -133,10 +133,7 @@ ScpiSimConfig ScpiSimConfig::from_json(const nlohmann::json& j) {
   }
   if (r.has("wavelengths"))
     c.wavelengths = WavelengthGrid::parse(r.required<std::string>("wavelengths"), r.path("wavelengths"));
-  const auto num = [&](const char* key, double& v, double lo, double hi) {
-    v = r.optional<double>(key, v);
-    if (!(v >= lo && v <= hi)) throw Error::out_of_range(r.path(key), v, lo, hi);
-  };
+  const auto num = [&](const char* key, double& v, double lo, double hi) { v = r.optional_in(key, v, lo, hi); };
   num("min_integration_ms", c.min_integration_ms, 0.01, 1e6);
   num("max_integration_ms", c.max_integration_ms, c.min_integration_ms, 1e6);
   num("integration_ms", c.integration_ms, c.min_integration_ms, c.max_integration_ms);

@@ -20,30 +20,6 @@ namespace {
 using json_util::ObjectReader;
 using std::chrono::milliseconds;
 
-double ranged(ObjectReader& r, const std::string& key, double fallback, double lo, double hi,
-              std::string_view unit = {}) {
-  const double v = r.optional<double>(key, fallback);
-  if (!(v >= lo && v <= hi)) throw Error::out_of_range(r.path(key), v, lo, hi, unit);
-  return v;
-}
-
-long long ranged_int(ObjectReader& r, const std::string& key, long long fallback, long long lo,
-                     long long hi) {
-  const long long v = r.optional<long long>(key, fallback);
-  if (v < lo || v > hi)
-    throw Error::out_of_range(r.path(key), static_cast<double>(v), static_cast<double>(lo),
-                              static_cast<double>(hi));
-  return v;
-}
-
-long long required_int(ObjectReader& r, const std::string& key, long long lo, long long hi) {
-  const long long v = r.required<long long>(key);
-  if (v < lo || v > hi)
-    throw Error::out_of_range(r.path(key), static_cast<double>(v), static_cast<double>(lo),
-                              static_cast<double>(hi));
-  return v;
-}
-
 LinkConfig read_link(const std::string& name, const nlohmann::json& j, const std::string& ctx) {
   ObjectReader r(j, ctx);
   LinkConfig link;
@@ -54,12 +30,12 @@ LinkConfig read_link(const std::string& name, const nlohmann::json& j, const std
     link.host = r.required<std::string>("host");
     if (link.host.empty() || link.host.size() > 253)
       throw Error::invalid(r.path("host"), "must be a host name or address");
-    link.port = static_cast<int>(ranged_int(r, "port", 502, 1, 65535));
+    link.port = static_cast<int>(r.optional_in<long long>("port", 502, 1, 65535));
   } else if (type == "rtu") {
     link.kind = LinkConfig::Kind::rtu;
     link.device = r.required<std::string>("device");
     if (link.device.empty()) throw Error::invalid(r.path("device"), "must name a serial device");
-    link.baud = static_cast<int>(ranged_int(r, "baud", 115200, 1200, 4000000));
+    link.baud = static_cast<int>(r.optional_in<long long>("baud", 115200, 1200, 4000000));
     parse_serial_format(r.path("format"), r.optional<std::string>("format", "8E1"), link);
     link.rs485 = r.optional<bool>("rs485", false);
   } else {
@@ -84,7 +60,7 @@ AxisConfig read_axis(Axis axis, const nlohmann::json& j, const std::string& ctx,
   ObjectReader r(j, ctx);
   AxisConfig a;
   a.axis = axis;
-  const std::string name(axis_name(axis));
+  const std::string name(to_text(axis));
   reject_moved(r, "min_deg", fmt::format("{} = [MIN, MAX]", name));
   reject_moved(r, "max_deg", fmt::format("{} = [MIN, MAX]", name));
   if (links.size() == 1 && !r.has("link")) {
@@ -99,20 +75,20 @@ AxisConfig read_axis(Axis axis, const nlohmann::json& j, const std::string& ctx,
     }
   }
   // Modbus serial line spec §2.2: individual slave addresses are 1..247.
-  a.unit = static_cast<int>(required_int(r, "unit", 1, 247));
+  a.unit = static_cast<int>(r.required_in<long long>("unit", 1, 247));
   a.scale.steps_per_degree = r.required<double>("steps_per_degree");
   if (!(std::abs(a.scale.steps_per_degree) >= 1e-3 && std::abs(a.scale.steps_per_degree) <= 1e7))
     throw Error(Errc::out_of_range,
                 fmt::format("{} = {:g} must have a magnitude in [0.001, 1e+07] steps/°",
                             r.path("steps_per_degree"), a.scale.steps_per_degree),
                 r.path("steps_per_degree"));
-  a.scale.zero_deg = ranged(r, "zero_deg", 0, -3600, 3600, "°");
-  a.speed_deg_s = ranged(r, "speed_deg_s", 10, 1e-3, 1e4, "°/s");
-  a.accel_deg_s2 = ranged(r, "accel_deg_s2", 50, 1e-3, 1e6, "°/s²");
-  a.decel_deg_s2 = ranged(r, "decel_deg_s2", a.accel_deg_s2, 1e-3, 1e6, "°/s²");
-  a.current_percent = ranged(r, "current_percent", 100, 0, 100, " %");
-  a.in_position_deg = ranged(r, "in_position_deg", 0.01, 0, 10, "°");
-  a.following_error_deg = ranged(r, "following_error_deg", 0.5, 0, 360, "°");
+  a.scale.zero_deg = r.optional_in<double>("zero_deg", 0, -3600, 3600, "°");
+  a.speed_deg_s = r.optional_in<double>("speed_deg_s", 10, 1e-3, 1e4, "°/s");
+  a.accel_deg_s2 = r.optional_in<double>("accel_deg_s2", 50, 1e-3, 1e6, "°/s²");
+  a.decel_deg_s2 = r.optional_in<double>("decel_deg_s2", a.accel_deg_s2, 1e-3, 1e6, "°/s²");
+  a.current_percent = r.optional_in<double>("current_percent", 100, 0, 100, " %");
+  a.in_position_deg = r.optional_in<double>("in_position_deg", 0.01, 0, 10, "°");
+  a.following_error_deg = r.optional_in<double>("following_error_deg", 0.5, 0, 360, "°");
   if (const auto* m = r.raw("register_map"))
     a.map = RegisterMap::from_json(*m, r.path("register_map"));
   else
@@ -167,19 +143,19 @@ MotionConfig MotionConfig::from_json(const nlohmann::json& j) {
   RegisterMap default_map;
   if (const auto* m = r.raw("register_map")) default_map = RegisterMap::from_json(*m, "register_map");
 
-  c.timing.response_timeout = milliseconds(ranged_int(r, "response_timeout_ms", 200, 1, 60000));
-  c.timing.byte_timeout = milliseconds(ranged_int(r, "byte_timeout_ms", 50, 1, 10000));
-  c.timing.retries = static_cast<int>(ranged_int(r, "retries", 2, 0, 10));
+  c.timing.response_timeout = milliseconds(r.optional_in<long long>("response_timeout_ms", 200, 1, 60000));
+  c.timing.byte_timeout = milliseconds(r.optional_in<long long>("byte_timeout_ms", 50, 1, 10000));
+  c.timing.retries = static_cast<int>(r.optional_in<long long>("retries", 2, 0, 10));
   if (const auto* rc = r.raw("reconnect")) {
     ObjectReader rr(*rc, "reconnect");
-    c.timing.backoff_initial = milliseconds(ranged_int(rr, "initial_ms", 50, 1, 60000));
-    c.timing.backoff_max = milliseconds(ranged_int(rr, "max_ms", 2000, 1, 600000));
+    c.timing.backoff_initial = milliseconds(rr.optional_in<long long>("initial_ms", 50, 1, 60000));
+    c.timing.backoff_max = milliseconds(rr.optional_in<long long>("max_ms", 2000, 1, 600000));
     if (c.timing.backoff_max < c.timing.backoff_initial)
       throw Error::invalid(rr.path("max_ms"), "must not be below initial_ms");
     rr.finish();
   }
-  c.poll_interval = milliseconds(ranged_int(r, "poll_interval_ms", 10, 1, 1000));
-  c.settle_timeout = milliseconds(ranged_int(r, "settle_timeout_ms", 1000, 0, 60000));
+  c.poll_interval = milliseconds(r.optional_in<long long>("poll_interval_ms", 10, 1, 1000));
+  c.settle_timeout = milliseconds(r.optional_in<long long>("settle_timeout_ms", 1000, 0, 60000));
 
   const auto* axes = r.raw("axes");
   if (axes == nullptr) throw Error::invalid("axes", "is required");
@@ -187,7 +163,7 @@ MotionConfig MotionConfig::from_json(const nlohmann::json& j) {
     throw Error::invalid("axes", "expected an object with at least one axis");
   std::set<std::pair<std::string, int>> units;
   for (const auto& [name, aj] : axes->items()) {
-    const Axis axis = parse_axis(join_field("axes", name), name);
+    const Axis axis = parse_enum<Axis>(name, join_field("axes", name));
     auto a = read_axis(axis, aj, join_field("axes", name), default_map, c.links);
     if (!units.emplace(a.link, a.unit).second)
       throw Error::invalid(join_field(join_field("axes", name), "unit"),

@@ -170,33 +170,19 @@ class ScpiPhotometer final : public Photometer {
 
 }  // namespace
 
-std::string_view preset_name(Preset p) noexcept { return p == Preset::gonio ? "gonio" : "pm100"; }
-
-Preset preset_from_name(std::string_view name, std::string_view field) {
-  if (name == "gonio") return Preset::gonio;
-  if (name == "pm100") return Preset::pm100;
-  throw Error::invalid(std::string(field), fmt::format("'{}' is not a preset (allowed: gonio, pm100)", name));
-}
-
 PhotometerConfig PhotometerConfig::read(json_util::ObjectReader& r) {
   PhotometerConfig c;
-  c.preset = preset_from_name(r.optional<std::string>("preset", "gonio"), r.path("preset"));
+  c.preset = parse_enum<Preset>(r.optional<std::string>("preset", "gonio"), r.path("preset"));
   if (const auto* w = r.raw("wavelengths"); w != nullptr && !w->is_null()) {
     if (w->is_string())
       c.wavelengths = WavelengthGrid::parse(w->get<std::string>(), r.path("wavelengths"));
     else
       c.wavelengths = json_util::get_as<WavelengthGrid>(*w, r.path("wavelengths"));
   }
-  c.repeats = r.optional<int>("repeats", c.repeats);
-  if (c.repeats < 1 || c.repeats > 1000) throw Error::out_of_range(r.path("repeats"), c.repeats, 1, 1000);
-  c.averages = r.optional<int>("averages", c.averages);
-  if (c.averages < 0 || c.averages > 100000)
-    throw Error::out_of_range(r.path("averages"), c.averages, 0, 100000);
+  c.repeats = r.optional_in("repeats", c.repeats, 1, 1000);
+  c.averages = r.optional_in("averages", c.averages, 0, 100000);
   c.check_errors = r.optional<bool>("check_errors", c.check_errors);
-  const auto ms = r.optional<long long>("open_timeout_ms", 5000);
-  if (ms < 1 || ms > 600000)
-    throw Error::out_of_range(r.path("open_timeout_ms"), static_cast<double>(ms), 1, 600000, " ms");
-  c.open_timeout = std::chrono::milliseconds(ms);
+  c.open_timeout = std::chrono::milliseconds(r.optional_in<long long>("open_timeout_ms", 5000, 1, 600000, " ms"));
   if (c.preset == Preset::pm100 && !c.wavelengths)
     throw Error::invalid(r.path("wavelengths"), "is required for the pm100 preset");
   return c;
