@@ -163,14 +163,14 @@ void Instrument::publish_state() { hub_.publish(Topic::state, "instrument.state"
 
 json Instrument::positions_json() const {
   json p = json::object();
-  for (const auto& [axis, deg] : positions_) p[std::string(drivers::axis_name(axis))] = deg;
+  for (const auto& [axis, deg] : positions_) p[std::string(to_text(axis))] = deg;
   return p;
 }
 
 json Instrument::status() const {
   std::lock_guard lock(mu_);
   json axes = json::array();
-  for (Axis a : axes_) axes.push_back(drivers::axis_name(a));
+  for (Axis a : axes_) axes.push_back(to_text(a));
   return json{
       {"state", state_},
       {"detail", state_detail_},
@@ -333,7 +333,7 @@ void Instrument::loop() {
     pending.swap(commands_);
   }
   for (auto& c : pending)
-    c->done.set_exception(std::make_exception_ptr(Error(Errc::invalid_state, "goniod is stopping")));
+    c->done.set_exception(std::make_exception_ptr(Error::wrong_state("", "goniod is stopping")));
 }
 
 }  // namespace gonio::daemon

@@ -34,20 +34,24 @@ std::string worded_reason(ScanState to, const std::string& reason, const std::st
 
 // ---- scheduler operations ---------------------------------------------------------------
 
+Scan Instrument::stored_scan(std::int64_t id) const {
+  auto sc = store_.scan(id);
+  if (!sc) throw Error::not_found("scan", fmt::format("scan {}", id));
+  return *std::move(sc);
+}
+
 Scan Instrument::transition(std::int64_t id, ScanState to, const std::string& reason,
                             const std::string& actor) {
   store_.set_scan_state(id, to, worded_reason(to, reason, actor), actor);
-  auto sc = store_.scan(id);
-  if (!sc) throw Error(Errc::not_found, fmt::format("scan {} does not exist", id), "scan");
+  const auto sc = stored_scan(id);
   hub_.publish(Topic::state, "scan.state",
-               json{{"scan", id}, {"state", to_string(sc->state)}, {"reason", sc->reason}}, id);
-  return *sc;
+               json{{"scan", id}, {"state", to_text(sc.state)}, {"reason", sc.reason}}, id);
+  return sc;
 }
 
 Scan Instrument::pause(std::int64_t id, const std::string& actor, const std::string& reason) {
   std::unique_lock sched(sched_mu_);
-  auto sc = store_.scan(id);
-  if (!sc) throw Error(Errc::not_found, fmt::format("scan {} does not exist", id), "scan");
+  const auto sc = stored_scan(id);
   {
     std::unique_lock lock(mu_);
     if (running_ == id) {
@@ -61,28 +65,24 @@ Scan Instrument::pause(std::int64_t id, const std::string& actor, const std::str
       return *store_.scan(id);
     }
   }
-  if (sc->state == ScanState::paused) return *sc;
-  if (sc->state != ScanState::queued && sc->state != ScanState::interrupted)
-    throw Error(Errc::invalid_state,
-                fmt::format("scan {} is {}; only queued, running or interrupted scans can be "
-                            "paused",
-                            id, to_string(sc->state)),
-                "scan");
+  if (sc.state == ScanState::paused) return sc;
+  if (sc.state != ScanState::queued && sc.state != ScanState::interrupted)
+    throw Error::wrong_state("scan", fmt::format("scan {} is {}; only queued, running or "
+                                                 "interrupted scans can be paused",
+                                                 id, to_text(sc.state)));
   return transition(id, ScanState::paused, reason, actor);
 }
 
 Scan Instrument::resume(std::int64_t id, const std::string& actor) {
   std::lock_guard sched(sched_mu_);
-  auto sc = store_.scan(id);
-  if (!sc) throw Error(Errc::not_found, fmt::format("scan {} does not exist", id), "scan");
-  if (sc->state != ScanState::paused)
-    throw Error(Errc::invalid_state,
-                fmt::format("scan {} is {}; only paused scans can be resumed{}", id,
-                            to_string(sc->state),
-                            sc->state == ScanState::interrupted ? " (interrupted ones resume by "
-                                                                  "themselves)"
-                                                                : ""),
-                "scan");
+  const auto sc = stored_scan(id);
+  if (sc.state != ScanState::paused)
+    throw Error::wrong_state(
+        "scan", fmt::format("scan {} is {}; only paused scans can be resumed{}", id,
+                            to_text(sc.state),
+                            sc.state == ScanState::interrupted
+                                ? " (interrupted ones resume by themselves)"
+                                : ""));
   auto queued = transition(id, ScanState::queued, "", actor);
   {
     std::lock_guard lock(mu_);
@@ -97,8 +97,7 @@ Scan Instrument::resume(std::int64_t id, const std::string& actor) {
 
 Scan Instrument::cancel(std::int64_t id, const std::string& actor, const std::string& reason) {
   std::unique_lock sched(sched_mu_);
-  auto sc = store_.scan(id);
-  if (!sc) throw Error(Errc::not_found, fmt::format("scan {} does not exist", id), "scan");
+  const auto sc = stored_scan(id);
   {
     std::unique_lock lock(mu_);
     if (running_ == id) {
@@ -112,9 +111,8 @@ Scan Instrument::cancel(std::int64_t id, const std::string& actor, const std::st
       return *store_.scan(id);
     }
   }
-  if (is_final(sc->state))
-    throw Error(Errc::invalid_state,
-                fmt::format("scan {} is already {}", id, to_string(sc->state)), "scan");
+  if (is_final(sc.state))
+    throw Error::wrong_state("scan", fmt::format("scan {} is already {}", id, to_text(sc.state)));
   return transition(id, ScanState::cancelled, reason, actor);
 }
 
@@ -135,7 +133,7 @@ json Instrument::submit(std::function<json()> fn) {
   auto fut = cmd->done.get_future();
   {
     std::lock_guard lock(mu_);
-    if (stopping_) throw Error(Errc::invalid_state, "goniod is stopping");
+    if (stopping_) throw Error::wrong_state("", "goniod is stopping");
     if (running_)
       throw Error(Errc::busy,
                   fmt::format("the instrument is running scan {}; pause it first", *running_));
@@ -155,7 +153,7 @@ json Instrument::home(std::vector<Axis> axes, const std::string& actor) {
     }
     store_.audit(actor, "instrument.home", "", json{{"axes", [&] {
                                                       json a = json::array();
-                                                      for (Axis x : axes) a.push_back(drivers::axis_name(x));
+                                                      for (Axis x : axes) a.push_back(to_text(x));
                                                       return a;
                                                     }()}});
     set_state("homing");
@@ -182,7 +180,7 @@ json Instrument::move(const std::map<Axis, double>& targets, const std::string& 
   for (const auto& [axis, deg] : targets) guard_.check_limits(axis, deg);
   return submit([this, targets, actor] {
     json detail = json::object();
-    for (const auto& [axis, deg] : targets) detail[std::string(drivers::axis_name(axis))] = deg;
+    for (const auto& [axis, deg] : targets) detail[std::string(to_text(axis))] = deg;
     store_.audit(actor, "instrument.move", "", detail);
     double i = 0, r = 0;
     {

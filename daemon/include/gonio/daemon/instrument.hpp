@@ -1,4 +1,4 @@
-// Instrument — the scheduler and scan runner on the instrument's own thread (DESIGN §5).
+// Instrument — the scheduler and scan runner on the instrument's own thread (docs/architecture.md §5).
 //
 // One thread owns the drivers (they may block). It runs manual commands (home, move, reset)
 // when no scan is running, and otherwise measures one point per loop turn:
@@ -111,6 +111,8 @@ class Instrument {
   // by <actor>", "cancelled by <actor>" or "resumed by <actor>" for those states), stores it
   // and publishes scan.state with the stored state and reason. Returns the stored scan.
   // Callers hold sched_mu_.
+  // The stored scan; throws Error::not_found("scan", ...).
+  Scan stored_scan(std::int64_t id) const;
   Scan transition(std::int64_t id, ScanState to, const std::string& reason,
                   const std::string& actor);
   DeviceFacts device_facts() const;  // for check_plan
