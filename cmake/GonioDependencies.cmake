@@ -25,5 +25,5 @@ if(GONIO_BUILD_BENCHMARKS)
   find_package(benchmark REQUIRED)
 endif()
 
-# CIE tables come from colord-data (DESIGN §2); the path is baked in as the default.
+# CIE tables come from colord-data (docs/architecture.md §2); the path is baked in as the default.
 set(GONIO_COLORD_DIR "/usr/share/colord" CACHE PATH "colord-data directory with cmf/ and illuminant/")

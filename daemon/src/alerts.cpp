@@ -34,7 +34,7 @@ Alert AlertService::raise(const AlertDraft& draft) {
                      : a.severity == Severity::warning ? spdlog::level::warn
                                                        : spdlog::level::info;
   if (created || a.count <= 1 || (a.count % 50) == 0)
-    spdlog::log(level, "alert {} [{}] {}: {}{}", a.id, to_string(a.severity), a.kind, a.message,
+    spdlog::log(level, "alert {} [{}] {}: {}{}", a.id, to_text(a.severity), a.kind, a.message,
                 a.count > 1 ? fmt::format(" (×{})", a.count) : std::string());
   hub_.publish(Topic::alerts, "alert", nlohmann::json(a), a.scan_id);
   const bool escalated = old_severity && a.severity > *old_severity;

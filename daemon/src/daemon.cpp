@@ -125,7 +125,7 @@ int run_daemon(const DaemonOptions& o) {
 
     TwinService twin(config, twin::InstrumentProfile::load(config.profile));
     Hub hub;
-    AlertService alerts(*store, hub, parse_severity(config.webhook_min_severity, "webhook.min_severity"));
+    AlertService alerts(*store, hub, parse_enum<Severity>(config.webhook_min_severity, "webhook.min_severity"));
     Instrument instrument(config, *store, twin, alerts, hub);
 
     asio::io_context io;

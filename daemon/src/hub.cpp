@@ -5,24 +5,6 @@
 
 namespace gonio::daemon {
 
-std::string_view topic_name(Topic t) noexcept {
-  switch (t) {
-    case Topic::progress: return "progress";
-    case Topic::points: return "points";
-    case Topic::alerts: return "alerts";
-    case Topic::state: return "state";
-  }
-  return "state";
-}
-
-Topic parse_topic(std::string_view text, std::string_view field) {
-  for (Topic t : {Topic::progress, Topic::points, Topic::alerts, Topic::state})
-    if (topic_name(t) == text) return t;
-  throw Error::invalid(std::string(field),
-                       fmt::format("'{}' is not a topic (allowed: progress, points, alerts, state)",
-                                   text));
-}
-
 void Hub::subscribe(const std::shared_ptr<rpc::Session>& s, const std::set<Topic>& topics,
                     std::optional<std::int64_t> scan) {
   std::lock_guard lock(mu_);

@@ -111,15 +111,15 @@ void Instrument::finish_run(ScanState state, const std::string& reason, const st
   std::optional<Scan> sc;
   try {
     sc = transition(r->scan.id, state, reason, actor);
-    spdlog::info("scan {}: {}{}", r->scan.id, to_string(state),
+    spdlog::info("scan {}: {}{}", r->scan.id, to_text(state),
                  sc->reason.empty() ? "" : ": " + sc->reason);
   } catch (const Error& e) {
-    spdlog::error("scan {}: cannot record state {}: {}", r->scan.id, to_string(state), e.what());
+    spdlog::error("scan {}: cannot record state {}: {}", r->scan.id, to_text(state), e.what());
   }
   if (sc)
     hub_.publish(Topic::progress, "scan.progress",
                  json{{"scan", sc->id},
-                      {"state", to_string(sc->state)},
+                      {"state", to_text(sc->state)},
                       {"reason", sc->reason},
                       {"points_done", sc->points_done},
                       {"points_total", sc->points_total},
@@ -128,7 +128,7 @@ void Instrument::finish_run(ScanState state, const std::string& reason, const st
                  sc->id);
   settle_state();
   if (status_listener_)
-    status_listener_(fmt::format("scan {} {}", r->scan.id, to_string(state)));
+    status_listener_(fmt::format("scan {} {}", r->scan.id, to_text(state)));
   cv_.notify_all();  // pause()/cancel() wait for this
 }
 

@@ -295,8 +295,8 @@ void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
                                       name),
                           Errc::unauthorized));
     else
-      finish(std::nullopt, error_object(Error::forbidden(name, role_name(method.role), who.name,
-                                                         role_name(who.role))));
+      finish(std::nullopt, error_object(Error::forbidden(name, to_text(method.role), who.name,
+                                                         to_text(who.role))));
     return;
   }
   auto run = [&method, session, who = std::move(who), name, params = std::move(params),

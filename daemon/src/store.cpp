@@ -150,7 +150,7 @@ class Transaction {
 
 // Migration k brings the schema from version k to k + 1. Never edit a released one.
 constexpr const char* kMigrations[] = {
-    // 0 -> 1: the five tables of DESIGN §5.
+    // 0 -> 1: the five tables of docs/architecture.md §5.
     R"sql(
 CREATE TABLE samples (
   id INTEGER PRIMARY KEY,
@@ -234,7 +234,7 @@ Scan read_scan(const Stmt& s) {
                                             e.what()));
   }
   sc.plan.sample_id = s.i64(1);
-  sc.state = parse_scan_state(s.text(3));
+  sc.state = parse_enum<ScanState>(s.text(3), "state");
   sc.reason = s.text(4);
   sc.predicted = s.i64(5) != 0;
   sc.queue_position = s.i64(6);
@@ -506,7 +506,7 @@ std::vector<Scan> Store::scans(const ScanFilter& f) const {
   Stmt s(*c, fmt::format("SELECT {} FROM scans WHERE (?1 IS NULL OR state = ?1) AND "
                          "(?2 IS NULL OR sample_id = ?2) ORDER BY id DESC LIMIT ?3 OFFSET ?4",
                          kScanColumns));
-  if (f.state) s.bind(1, std::string(to_string(*f.state)));
+  if (f.state) s.bind(1, std::string(to_text(*f.state)));
   s.bind(2, f.sample_id).bind(3, f.limit).bind(4, f.offset);
   std::vector<Scan> out;
   while (s.step()) out.push_back(read_scan(s));
@@ -565,13 +565,13 @@ void Store::set_scan_state(std::int64_t id, ScanState state, const std::string& 
                  "ELSE started_at END, "
                  "finished_at = CASE WHEN ?1 IN ('completed','failed','cancelled') THEN ?3 "
                  "ELSE finished_at END WHERE id = ?4")
-      .bind(1, std::string(to_string(state)))
+      .bind(1, std::string(to_text(state)))
       .bind(2, reason)
       .bind(3, now)
       .bind(4, id)
       .run();
   audit_in(*writer_, actor, "scan.state", fmt::format("scan:{}", id),
-           json{{"from", old}, {"to", to_string(state)}, {"reason", reason}});
+           json{{"from", old}, {"to", to_text(state)}, {"reason", reason}});
   t.commit();
 }
 
@@ -814,12 +814,12 @@ void Store::put_token(const TokenEntry& t) {
                  "ON CONFLICT(name) DO UPDATE SET role = excluded.role, sha256 = excluded.sha256, "
                  "created_at = excluded.created_at")
       .bind(1, t.name)
-      .bind(2, std::string(role_name(t.role)))
+      .bind(2, std::string(to_text(t.role)))
       .bind(3, t.sha256)
       .bind(4, utc::now())
       .run();
   audit_in(*writer_, "goniod", "auth.token", fmt::format("token:{}", t.name),
-           json{{"role", role_name(t.role)}});
+           json{{"role", to_text(t.role)}});
   tx.commit();
 }
 

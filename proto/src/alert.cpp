@@ -12,12 +12,6 @@
 namespace gonio {
 namespace {
 
-constexpr std::array<std::pair<Severity, std::string_view>, 3> kSeverities{{
-    {Severity::info, "info"},
-    {Severity::warning, "warning"},
-    {Severity::critical, "critical"},
-}};
-
 template <typename T>
 nlohmann::json opt(const std::optional<T>& v) {
   return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
@@ -32,24 +26,10 @@ std::optional<T> read_opt(json_util::ObjectReader& r, const std::string& key) {
 
 }  // namespace
 
-std::string_view to_string(Severity s) noexcept {
-  for (const auto& [sev, name] : kSeverities)
-    if (sev == s) return name;
-  return "warning";
-}
-
-Severity parse_severity(std::string_view text, std::string_view field) {
-  for (const auto& [sev, name] : kSeverities)
-    if (name == text) return sev;
-  throw Error::invalid(std::string(field),
-                       fmt::format("'{}' is not a severity (allowed: info, warning, critical)",
-                                   text));
-}
-
 void to_json(nlohmann::json& j, const Alert& a) {
   j = nlohmann::json{{"id", a.id},
                      {"kind", a.kind},
-                     {"severity", to_string(a.severity)},
+                     {"severity", to_text(a.severity)},
                      {"dedup_key", a.dedup_key},
                      {"scan_id", opt(a.scan_id)},
                      {"sample_id", opt(a.sample_id)},
@@ -67,7 +47,7 @@ void from_json(const nlohmann::json& j, Alert& a) {
   json_util::ObjectReader r(j, "");
   a.id = r.required<std::int64_t>("id");
   a.kind = r.required<std::string>("kind");
-  a.severity = parse_severity(r.required<std::string>("severity"), "severity");
+  a.severity = parse_enum<Severity>(r.required<std::string>("severity"), "severity");
   a.dedup_key = r.optional<std::string>("dedup_key", "");
   a.scan_id = read_opt<std::int64_t>(r, "scan_id");
   a.sample_id = read_opt<std::int64_t>(r, "sample_id");

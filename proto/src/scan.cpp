@@ -85,30 +85,6 @@ Clock::time_point parse(std::string_view s, std::string_view field) {
 
 namespace {
 
-constexpr std::array<std::pair<ReferenceMode, std::string_view>, 3> kReferenceModes{{
-    {ReferenceMode::every_point, "every_point"},
-    {ReferenceMode::interval, "interval"},
-    {ReferenceMode::start, "start"},
-}};
-
-constexpr std::array<std::pair<ScanState, std::string_view>, 7> kStates{{
-    {ScanState::queued, "queued"},
-    {ScanState::running, "running"},
-    {ScanState::paused, "paused"},
-    {ScanState::interrupted, "interrupted"},
-    {ScanState::completed, "completed"},
-    {ScanState::failed, "failed"},
-    {ScanState::cancelled, "cancelled"},
-}};
-
-ReferenceMode parse_reference_mode(std::string_view text, const std::string& field) {
-  for (const auto& [m, s] : kReferenceModes)
-    if (s == text) return m;
-  throw Error::invalid(field, fmt::format("'{}' is not a reference mode (allowed: every_point, "
-                                          "interval, start)",
-                                          text));
-}
-
 // One entry of "geometries": a name ("45as15", "45/30"), the ASTM set ("astm") or an object.
 void append_geometry(const nlohmann::json& item, const std::string& field,
                      std::vector<Geometry>& out) {
@@ -136,12 +112,6 @@ void append_geometry(const nlohmann::json& item, const std::string& field,
 }
 
 }  // namespace
-
-std::string_view to_string(ReferenceMode m) noexcept {
-  for (const auto& [mode, s] : kReferenceModes)
-    if (mode == m) return s;
-  return "every_point";
-}
 
 bool ScanPlan::reads_reference(std::size_t since_start) const noexcept {
   switch (reference) {
@@ -188,7 +158,7 @@ void to_json(nlohmann::json& j, const ScanPlan& p) {
                      {"geometries", p.geometries},
                      {"wavelengths", p.wavelengths},
                      {"repeats", p.repeats},
-                     {"reference", {{"mode", to_string(p.reference)},
+                     {"reference", {{"mode", to_text(p.reference)},
                                     {"interval", p.reference_interval}}},
                      {"priority", p.priority},
                      {"not_before", p.not_before ? nlohmann::json(*p.not_before)
@@ -240,11 +210,11 @@ void from_json(const nlohmann::json& j, ScanPlan& p) {
   p.repeats = r.optional<int>("repeats", 1);
   if (const auto* ref = r.raw("reference"); ref && !ref->is_null()) {
     if (ref->is_string()) {
-      p.reference = parse_reference_mode(ref->get<std::string>(), "reference");
+      p.reference = parse_enum<ReferenceMode>(ref->get<std::string>(), "reference");
     } else {
       json_util::ObjectReader rr(*ref, "reference");
       p.reference =
-          parse_reference_mode(rr.optional<std::string>("mode", "every_point"), "reference.mode");
+          parse_enum<ReferenceMode>(rr.optional<std::string>("mode", "every_point"), "reference.mode");
       p.reference_interval = rr.optional<int>("interval", 10);
       rr.finish();
     }
@@ -258,21 +228,6 @@ void from_json(const nlohmann::json& j, ScanPlan& p) {
 
 // ---- scans -------------------------------------------------------------------------------
 
-std::string_view to_string(ScanState s) noexcept {
-  for (const auto& [state, name] : kStates)
-    if (state == s) return name;
-  return "queued";
-}
-
-ScanState parse_scan_state(std::string_view text, std::string_view field) {
-  for (const auto& [state, name] : kStates)
-    if (name == text) return state;
-  throw Error::invalid(std::string(field),
-                       fmt::format("'{}' is not a scan state (allowed: queued, running, paused, "
-                                   "interrupted, completed, failed, cancelled)",
-                                   text));
-}
-
 nlohmann::json to_json(const Scan& s, bool with_geometries) {
   nlohmann::json plan = s.plan;
   if (!with_geometries) {
@@ -284,7 +239,7 @@ nlohmann::json to_json(const Scan& s, bool with_geometries) {
   };
   return nlohmann::json{{"id", s.id},
                         {"plan", std::move(plan)},
-                        {"state", to_string(s.state)},
+                        {"state", to_text(s.state)},
                         {"reason", s.reason},
                         {"predicted", s.predicted},
                         {"submitted_by", s.submitted_by},

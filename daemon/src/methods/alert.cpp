@@ -18,7 +18,7 @@ void register_alert(MethodRegistrar& reg, Services& s) {
       if (*f.scan_id <= 0) throw Error::invalid("scan", "is not an id (ids are >= 1)");
     }
     if (const auto* sv = r.raw("severity"); sv && !sv->is_null())
-      f.min_severity = parse_severity(json_util::get_as<std::string>(*sv, "severity"), "severity");
+      f.min_severity = parse_enum<Severity>(json_util::get_as<std::string>(*sv, "severity"), "severity");
     f.offset = methods::read_offset(r);
     f.limit = methods::read_count(r, "limit", 100, methods::kMaxPage);
     r.finish();

@@ -28,7 +28,7 @@ void register_auth(MethodRegistrar& reg, Services& s) {
       throw Error(Errc::unauthorized, "token: unknown token", "token");
     }
     c.session->set_principal(*p);
-    spdlog::info("{} logged in as {} on {} from {}", p->name, role_name(p->role),
+    spdlog::info("{} logged in as {} on {} from {}", p->name, to_text(p->role),
                  c.session->transport(), c.session->peer());
     return principal_json(*p);
   });
@@ -47,14 +47,14 @@ void register_auth(MethodRegistrar& reg, Services& s) {
       throw Error::invalid("name", "must have 1 to 64 characters, without spaces or ':'");
     const auto token = s.auth.create(name, role);
     s.store.audit(actor(c), "auth.create_token", fmt::format("token:{}", name),
-                  json{{"role", role_name(role)}});
-    return json{{"name", name}, {"role", role_name(role)}, {"token", token}};
+                  json{{"role", to_text(role)}});
+    return json{{"name", name}, {"role", to_text(role)}, {"token", token}};
   });
 
   reg.add("auth.list_tokens", [&s](rpc::Call& c) {
     ObjectReader(c.params, "").finish();
     json out = json::array();
-    for (const auto& t : s.auth.list()) out.push_back(json{{"name", t.name}, {"role", role_name(t.role)}});
+    for (const auto& t : s.auth.list()) out.push_back(json{{"name", t.name}, {"role", to_text(t.role)}});
     return out;
   });
 

@@ -21,7 +21,7 @@ namespace {
 std::map<drivers::Axis, double> read_targets(ObjectReader& r) {
   std::map<drivers::Axis, double> t;
   for (auto a : drivers::kAllAxes) {
-    const std::string key(drivers::axis_name(a));
+    const std::string key(to_text(a));
     if (r.has(key)) t[a] = r.required<double>(key);
   }
   return t;
@@ -42,7 +42,7 @@ void register_instrument(MethodRegistrar& reg, Services& s) {
       if (!a->is_array()) throw Error::invalid("axes", "expected an array of axis names");
       for (std::size_t i = 0; i < a->size(); ++i) {
         const auto field = fmt::format("axes[{}]", i);
-        axes.push_back(drivers::parse_axis(field, json_util::get_as<std::string>((*a)[i], field)));
+        axes.push_back(parse_enum<drivers::Axis>(json_util::get_as<std::string>((*a)[i], field), field));
       }
     }
     r.finish();
@@ -58,7 +58,7 @@ void register_instrument(MethodRegistrar& reg, Services& s) {
                                      "(degrees)");
     for (const auto& [axis, deg] : targets)
       if (!std::isfinite(deg))
-        throw Error::invalid(std::string(drivers::axis_name(axis)), "must be a finite number");
+        throw Error::invalid(std::string(to_text(axis)), "must be a finite number");
     return s.instrument.move(targets, actor(c));
   });
 

@@ -79,7 +79,7 @@ void register_scan(MethodRegistrar& reg, Services& s) {
     ObjectReader r(c.params, "");
     ScanFilter f;
     if (const auto* st = r.raw("state"); st && !st->is_null())
-      f.state = parse_scan_state(json_util::get_as<std::string>(*st, "state"), "state");
+      f.state = parse_enum<ScanState>(json_util::get_as<std::string>(*st, "state"), "state");
     if (const auto* sm = r.raw("sample"); sm && !sm->is_null())
       f.sample_id = resolve_sample(s.store, *sm, "sample").id;
     f.offset = read_offset(r);

@@ -21,7 +21,7 @@ void register_subscribe(MethodRegistrar& reg, Services& s) {
         throw Error::invalid("topics", "expected a non-empty array (progress, points, alerts, state)");
       for (std::size_t i = 0; i < t->size(); ++i) {
         const auto field = fmt::format("topics[{}]", i);
-        topics.insert(parse_topic(json_util::get_as<std::string>((*t)[i], field), field));
+        topics.insert(parse_enum<Topic>(json_util::get_as<std::string>((*t)[i], field), field));
       }
     } else {
       topics = {Topic::progress, Topic::points, Topic::alerts, Topic::state};
@@ -38,7 +38,7 @@ void register_subscribe(MethodRegistrar& reg, Services& s) {
                   "HTTP POST");
     s.hub.subscribe(c.session, topics, scan);
     json names = json::array();
-    for (auto t : s.hub.topics(c.session->id())) names.push_back(topic_name(t));
+    for (auto t : s.hub.topics(c.session->id())) names.push_back(to_text(t));
     return json{{"topics", std::move(names)}, {"scan", scan ? json(*scan) : json(nullptr)}};
   });
 
@@ -49,12 +49,12 @@ void register_subscribe(MethodRegistrar& reg, Services& s) {
       if (!t->is_array()) throw Error::invalid("topics", "expected an array");
       for (std::size_t i = 0; i < t->size(); ++i) {
         const auto field = fmt::format("topics[{}]", i);
-        topics.insert(parse_topic(json_util::get_as<std::string>((*t)[i], field), field));
+        topics.insert(parse_enum<Topic>(json_util::get_as<std::string>((*t)[i], field), field));
       }
     }
     r.finish();
     json names = json::array();
-    for (auto t : s.hub.unsubscribe(c.session->id(), topics)) names.push_back(topic_name(t));
+    for (auto t : s.hub.unsubscribe(c.session->id(), topics)) names.push_back(to_text(t));
     return json{{"topics", std::move(names)}};
   });
 }

@@ -33,7 +33,7 @@ MotionGuard::MotionGuard(double min_separation_deg) : min_separation_(min_separa
 }
 
 void MotionGuard::set_limits(Axis axis, SoftLimits limits) {
-  const std::string field = std::string(axis_name(axis));
+  const std::string field = std::string(to_text(axis));
   if (!std::isfinite(limits.min_deg) || !std::isfinite(limits.max_deg) ||
       limits.min_deg > limits.max_deg)
     throw Error(Errc::out_of_range,
@@ -53,7 +53,7 @@ double MotionGuard::arm_separation(double incidence_deg, double receive_deg) noe
 }
 
 void MotionGuard::check_limits(Axis axis, double target_deg) const {
-  const std::string field(axis_name(axis));
+  const std::string field(to_text(axis));
   if (!std::isfinite(target_deg))
     throw Error(Errc::limit_violation, fmt::format("{}: target {} is not a finite angle", field,
                                                    target_deg),
@@ -87,7 +87,7 @@ void MotionGuard::check_arms(double i0, double i1, double r0, double r1) const {
   const Axis axis = receive_moves ? Axis::receive : Axis::incidence;
   const double target = receive_moves ? r1 : i1;
   const double sep_at_target = arm_separation(i1, r1);
-  const std::string field(axis_name(axis));
+  const std::string field(to_text(axis));
   const bool target_bad = sep_at_target < min_separation_;
   throw Error(Errc::limit_violation,
               target_bad

@@ -10,29 +10,6 @@
 
 namespace gonio::drivers {
 
-std::string_view axis_name(Axis a) noexcept {
-  switch (a) {
-    case Axis::incidence: return "incidence";
-    case Axis::receive: return "receive";
-    case Axis::rotation: return "rotation";
-    case Axis::tilt: return "tilt";
-  }
-  return "unknown";
-}
-
-std::optional<Axis> axis_from_name(std::string_view name) noexcept {
-  for (const Axis a : kAllAxes)
-    if (axis_name(a) == name) return a;
-  return std::nullopt;
-}
-
-Axis parse_axis(std::string_view field, std::string_view name) {
-  if (const auto a = axis_from_name(name)) return *a;
-  throw Error::invalid(std::string(field),
-                       fmt::format("unknown axis '{}' (known: incidence, receive, rotation, tilt)",
-                                   name));
-}
-
 std::string to_string(const AxisStatus& s) {
   std::string flags;
   const auto add = [&](bool on, std::string_view word) {

@@ -7,15 +7,6 @@
 
 namespace gonio::drivers {
 
-std::string_view channel_name(Channel c) noexcept {
-  switch (c) {
-    case Channel::sample: return "sample";
-    case Channel::reference: return "reference";
-    case Channel::dark: return "dark";
-  }
-  return "unknown";
-}
-
 std::string Identity::to_string() const {
   std::string s = manufacturer;
   if (!model.empty()) s += (s.empty() ? "" : " ") + model;
@@ -29,7 +20,7 @@ void check_saturation(const Reading& r, SaturationPolicy policy) {
     throw Error(Errc::saturated,
                 fmt::format("detector saturated on the {} channel at {:g} ms integration; "
                             "shorten the integration time",
-                            channel_name(r.channel), r.integration_ms));
+                            to_text(r.channel), r.integration_ms));
 }
 
 }  // namespace gonio::drivers

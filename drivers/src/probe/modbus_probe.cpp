@@ -136,7 +136,7 @@ std::string hint(Errc c) {
 // Driver messages start with the internal axis name or the link; the probe speaks of the
 // unit on its link.
 std::string reword(const std::string& message, const std::string& who, const std::string& link) {
-  for (const std::string& prefix : {std::string(axis_name(kAxis)) + ": ", link + ": ",
+  for (const std::string& prefix : {std::string(to_text(kAxis)) + ": ", link + ": ",
                                     link + " unit "}) {
     if (message.rfind(prefix, 0) != 0) continue;
     std::string rest = message.substr(prefix.size());

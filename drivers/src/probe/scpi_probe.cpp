@@ -62,7 +62,7 @@ int run_scpi(const ScpiOptions& o, std::ostream& out, std::ostream& err) {
     if (o.command != "idn" && o.command != "measure")
       throw Error::invalid("command", fmt::format("'{}' (allowed: idn, measure)", o.command));
     scpi::PhotometerConfig pc;
-    pc.preset = scpi::preset_from_name(o.preset, "--preset");
+    pc.preset = parse_enum<scpi::Preset>(o.preset, "--preset");
     Channel ch = Channel::sample;
     if (o.channel == "reference") ch = Channel::reference;
     else if (o.channel == "dark") ch = Channel::dark;
@@ -86,7 +86,7 @@ int run_scpi(const ScpiOptions& o, std::ostream& out, std::ostream& err) {
       return 0;
     }
     const auto r = pm->measure(ch, o.timeout, SaturationPolicy::flag);
-    fmt::print(out, "# {} — {} channel, integration {:g} ms{}\n", id.to_string(), channel_name(ch),
+    fmt::print(out, "# {} — {} channel, integration {:g} ms{}\n", id.to_string(), to_text(ch),
                r.integration_ms, r.saturated ? ", SATURATED" : "");
     fmt::print(out, "# wavelength_nm value_{0} std_uncertainty_{0}\n", r.unit);
     const auto& w = r.spectrum.wavelengths;

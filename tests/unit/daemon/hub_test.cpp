@@ -62,7 +62,7 @@ TEST(Hub, CountsRefusedNotifications) {
   for (int i = 0; i < 3; ++i) hub.publish(Topic::alerts, "alert", json{{"id", i}});
   EXPECT_EQ(s->got.size(), 1u);
   EXPECT_EQ(hub.dropped(), 2u);
-  EXPECT_THROW(parse_topic("weather", "topics[0]"), Error);
+  EXPECT_THROW(parse_enum<Topic>("weather", "topics[0]"), Error);
 }
 
 }  // namespace

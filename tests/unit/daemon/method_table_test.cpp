@@ -93,7 +93,7 @@ std::map<std::string, std::string> readme_roles(const std::string& text) {
 
 std::map<std::string, std::string> table_roles() {
   std::map<std::string, std::string> out;
-  for (const auto& m : kMethodTable) out.emplace(std::string(m.name), std::string(role_name(m.role)));
+  for (const auto& m : kMethodTable) out.emplace(std::string(m.name), std::string(to_text(m.role)));
   return out;
 }
 
@@ -255,8 +255,8 @@ TEST_F(RegisteredMethods, RunWithTheTablesRoleAndBlocking) {
       } else {
         EXPECT_EQ(r["error"]["code"], rpc::code::forbidden) << name << ": " << r.dump();
         EXPECT_EQ(r["error"]["message"],
-                  fmt::format("{} needs the {} role; 'tester' has {}", name, role_name(m.role),
-                              role_name(below)))
+                  fmt::format("{} needs the {} role; 'tester' has {}", name, to_text(m.role),
+                              to_text(below)))
             << name;
       }
     }

@@ -136,8 +136,8 @@ TEST(Alert, RoundTripsAndParsesSeverity) {
   a.first_at = a.last_at = "2024-01-01T00:00:00.000Z";
   a.count = 3;
   EXPECT_EQ(json(a).get<Alert>(), a);
-  EXPECT_EQ(parse_severity("warning"), Severity::warning);
-  EXPECT_EQ(field_of([] { (void)parse_severity("loud", "severity"); }), "severity");
+  EXPECT_EQ(parse_enum<Severity>("warning", "severity"), Severity::warning);
+  EXPECT_EQ(field_of([] { (void)parse_enum<Severity>("loud", "severity"); }), "severity");
 }
 
 }  // namespace

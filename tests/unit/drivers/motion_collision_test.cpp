@@ -41,7 +41,7 @@ TEST(MotionGuard, ArmSeparationFollowsTheSampleFrame) {
   // Transmission: the receiver beyond 90° wraps around the far side.
   EXPECT_DOUBLE_EQ(MotionGuard::arm_separation(10, 180), 170);
   EXPECT_DOUBLE_EQ(MotionGuard::arm_separation(30, 320), 10);
-  // Independent check against the direction vectors of DESIGN §2.
+  // Independent check against the direction vectors of docs/architecture.md §2.
   for (double ti = -80; ti <= 80; ti += 13)
     for (double tr = -170; tr <= 170; tr += 17) {
       const double r = M_PI / 180;

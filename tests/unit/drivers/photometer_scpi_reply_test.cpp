@@ -80,7 +80,7 @@ TEST(ScpiReply, Identity) {
 }
 
 TEST(ScpiReply, PresetNames) {
-  EXPECT_EQ(scpi::preset_from_name("pm100"), scpi::Preset::pm100);
-  EXPECT_EQ(scpi::preset_name(scpi::Preset::gonio), "gonio");
-  EXPECT_EQ(code_of([] { scpi::preset_from_name("keithley"); }), Errc::invalid_argument);
+  EXPECT_EQ(gonio::parse_enum<scpi::Preset>("pm100", "preset"), scpi::Preset::pm100);
+  EXPECT_EQ(gonio::to_text(scpi::Preset::gonio), "gonio");
+  EXPECT_EQ(code_of([] { gonio::parse_enum<scpi::Preset>("keithley", "preset"); }), Errc::invalid_argument);
 }

@@ -36,7 +36,7 @@ MisWeights mis_weights(double pdf_aperture, double pdf_bsdf) {
 }
 
 double signed_receive_angle(const Vec3& w, double phi) {
-  // θr signed in the receiver's plane of measurement (DESIGN §2), degrees.
+  // θr signed in the receiver's plane of measurement (docs/architecture.md §2), degrees.
   const double in_plane = w.x * std::cos(phi) + w.y * std::sin(phi);
   return std::atan2(in_plane, w.z) * kRadToDeg;
 }

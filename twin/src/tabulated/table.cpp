@@ -185,15 +185,6 @@ std::vector<double> weigh_channels(const std::vector<double>& values, std::size_
 
 }  // namespace
 
-std::string_view to_string(TableParam p) noexcept {
-  switch (p) {
-    case TableParam::spherical: return "spherical";
-    case TableParam::specular: return "specular";
-    case TableParam::half_difference: return "half_difference";
-  }
-  return "spherical";
-}
-
 // ---- BsdfTable ----------------------------------------------------------------------------------
 
 std::size_t BsdfTable::check_axes(TableParam param, const Axes& axes, TableReduction reduction,

@@ -17,6 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "gonio/proto/enum_text.hpp"
 #include "gonio/drivers/motion/limits.hpp"
 
 namespace gonio::daemon {
@@ -24,7 +25,13 @@ namespace gonio::daemon {
 using std::chrono::milliseconds;
 
 enum class Role : int { none = 0, viewer = 1, technician = 2, admin = 3 };
-std::string_view role_name(Role r) noexcept;
+inline constexpr EnumNames<Role, 4> kRoleNames{{
+    {Role::none, "none"},
+    {Role::viewer, "viewer"},
+    {Role::technician, "technician"},
+    {Role::admin, "admin"},
+}};
+constexpr const auto& enum_names(Role) { return kRoleNames; }  // proto/enum_text.hpp
 // "viewer" | "technician" | "admin"; throws Error naming `field`.
 Role parse_role(std::string_view text, std::string_view field = "role");
 

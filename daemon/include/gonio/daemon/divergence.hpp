@@ -1,6 +1,6 @@
 // Divergence monitor: does a measured point agree with the twin's prediction?
 //
-// Per channel c (issue 5 §6):
+// Per channel c (docs/architecture.md §6):
 //     z_c = (m_c − p_c) / √(σm_c² + σp_c² + (tol · p_c)²)
 // with σm the measurement's standard uncertainty, σp the twin's standard error and tol the
 // sample's relative tolerance (which absorbs what neither uncertainty models: the catalog

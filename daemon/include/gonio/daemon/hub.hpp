@@ -25,14 +25,19 @@
 
 #include <nlohmann/json.hpp>
 
+#include "gonio/proto/enum_text.hpp"
 #include "gonio/daemon/rpc.hpp"
 
 namespace gonio::daemon {
 
 enum class Topic { progress, points, alerts, state };
-std::string_view topic_name(Topic t) noexcept;
-// Throws Error naming `field` and listing the topics.
-Topic parse_topic(std::string_view text, std::string_view field);
+inline constexpr EnumNames<Topic, 4> kTopicNames{{
+    {Topic::progress, "progress"},
+    {Topic::points, "points"},
+    {Topic::alerts, "alerts"},
+    {Topic::state, "state"},
+}};
+constexpr const auto& enum_names(Topic) { return kTopicNames; }  // proto/enum_text.hpp
 
 class Hub {
  public:

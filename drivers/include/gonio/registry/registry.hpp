@@ -1,5 +1,5 @@
 // The driver registry — a static table of every driver by name with its capabilities
-// (DESIGN §7.4: the mock is a driver like any other).
+// (docs/architecture.md §4: the mock is a driver like any other).
 //
 //   name          motion  photometer  what
 //   modbus        yes     -           Modbus RTU/TCP motion controllers (modbus/modbus_motion.hpp)

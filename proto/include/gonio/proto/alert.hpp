@@ -12,12 +12,17 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "gonio/proto/enum_text.hpp"
+
 namespace gonio {
 
 enum class Severity { info, warning, critical };
-std::string_view to_string(Severity s) noexcept;
-// Throws Error(invalid_argument) naming `field` and listing the severities.
-Severity parse_severity(std::string_view text, std::string_view field = "severity");
+inline constexpr EnumNames<Severity, 3> kSeverityNames{{
+    {Severity::info, "info"},
+    {Severity::warning, "warning"},
+    {Severity::critical, "critical"},
+}};
+constexpr const auto& enum_names(Severity) { return kSeverityNames; }  // proto/enum_text.hpp
 
 // Stable alert kinds.
 namespace alert_kind {

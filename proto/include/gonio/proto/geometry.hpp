@@ -1,4 +1,4 @@
-// Measurement geometry in the sample frame of DESIGN §2.
+// Measurement geometry in the sample frame of docs/architecture.md §2.
 //
 // Sample plane z = 0, normal +z, plane of measurement x–z. Angles in degrees.
 //   incident direction (toward the source): ωi = (−sin θi cos φi, −sin θi sin φi, cos θi)

@@ -3,7 +3,7 @@
 // Measured β(λ) is formed by the scan runner from sample, dark and reference readings
 // (β = β_ref (S − D) / (R − D_R), standard uncertainty k = 1 by first-order propagation);
 // the prediction is the twin's β(λ) with its standard error at the planned geometry. The
-// divergence figures follow issue 5 §6: z per channel from both uncertainties and the
+// divergence figures follow docs/architecture.md §6: z per channel from both uncertainties and the
 // sample's tolerance, and CIEDE2000 between the two spectra (null when the grid has no
 // visible overlap or there is no prediction).
 #pragma once

@@ -2,7 +2,7 @@
 //
 // A sample has a unique name, free notes, an optional reference BSDF spec for the twin
 // (twin/bsdf_spec.md; without one the sample is measured without predictions) and a
-// relative tolerance that widens the divergence test (issue 5 §6:
+// relative tolerance that widens the divergence test (docs/architecture.md §6:
 // z = (m − p) / √(σm² + σp² + (tol·p)²)).
 #pragma once
 

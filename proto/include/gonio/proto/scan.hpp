@@ -1,7 +1,7 @@
 // Scan plans and scan records: what a technician submits and what the scheduler tracks.
 //
 // A ScanPlan is the whole measurement request: a sample, the geometries in measuring order
-// (explicit geometries, the named ASTM set and/or grids in the DESIGN §2 syntax, expanded
+// (explicit geometries, the named ASTM set and/or grids in the docs/architecture.md §2 syntax, expanded
 // once at submission), the wavelengths, how often each geometry is repeated, how often the
 // reference white is read, and its place in the queue (priority, optional not-before time).
 // Point k of a plan measures geometry k / repeats (repeats of one geometry are consecutive,
@@ -27,6 +27,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "gonio/proto/enum_text.hpp"
 #include "gonio/proto/geometry.hpp"
 #include "gonio/proto/spectrum.hpp"
 
@@ -48,7 +49,12 @@ enum class ReferenceMode {
   interval,     // every `interval` points (and at the start)
   start,        // once at the start of the scan (and on resume)
 };
-std::string_view to_string(ReferenceMode m) noexcept;
+inline constexpr EnumNames<ReferenceMode, 3> kReferenceModeNames{{
+    {ReferenceMode::every_point, "every_point"},
+    {ReferenceMode::interval, "interval"},
+    {ReferenceMode::start, "start"},
+}};
+constexpr const auto& enum_names(ReferenceMode) { return kReferenceModeNames; }  // proto/enum_text.hpp
 
 struct ScanPlan {
   static constexpr std::size_t kMaxPoints = 100000;
@@ -86,9 +92,16 @@ void to_json(nlohmann::json& j, const ScanPlan& p);
 void from_json(const nlohmann::json& j, ScanPlan& p);
 
 enum class ScanState { queued, running, paused, interrupted, completed, failed, cancelled };
-std::string_view to_string(ScanState s) noexcept;
-// Throws Error(invalid_argument) naming `field` and listing the states.
-ScanState parse_scan_state(std::string_view text, std::string_view field = "state");
+inline constexpr EnumNames<ScanState, 7> kScanStateNames{{
+    {ScanState::queued, "queued"},
+    {ScanState::running, "running"},
+    {ScanState::paused, "paused"},
+    {ScanState::interrupted, "interrupted"},
+    {ScanState::completed, "completed"},
+    {ScanState::failed, "failed"},
+    {ScanState::cancelled, "cancelled"},
+}};
+constexpr const auto& enum_names(ScanState) { return kScanStateNames; }  // proto/enum_text.hpp
 inline bool is_final(ScanState s) noexcept {
   return s == ScanState::completed || s == ScanState::failed || s == ScanState::cancelled;
 }

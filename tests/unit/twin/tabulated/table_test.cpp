@@ -239,7 +239,7 @@ TEST(TabulatedBsdf, ResamplesTheTableSpectrumOntoTheGrid) {
   EXPECT_EQ(*g.parts().brdf, *grey.brdf);
 }
 
-// tabulate() on the DESIGN §2 frame: the in-plane geometry (θi, θr) of the instrument maps
+// tabulate() on the docs/architecture.md §2 frame: the in-plane geometry (θi, θr) of the instrument maps
 // onto the table so that the tabulated model and the model agree at every node, including
 // the specular (θr = θi) and retro (θr = −θi) sides.
 TEST(TabulatedBsdf, TabulateAgreesWithTheModelAtNodesInTheInstrumentFrame) {

@@ -1,6 +1,6 @@
 // Bsdf — the interface every scattering model implements.
 //
-// Conventions (DESIGN §2): directions are unit vectors in the sample frame (normal +z),
+// Conventions (docs/architecture.md §2): directions are unit vectors in the sample frame (normal +z),
 // both pointing away from the surface: `wi` toward the light source, `wo` toward the
 // receiver. Reflection when wi.z and wo.z share a sign, transmission otherwise.
 // f(wi, wo) is in sr⁻¹, per wavelength channel, without the cosine factor; the radiance

@@ -2,7 +2,7 @@
 //
 // The CIE tables are not typed into the code: the colour-matching functions and the
 // illuminants are read from the CGATS text files of the Debian package colord-data
-// (DESIGN §2): <dir>/cmf/CIE1931-2deg-XYZ.cmf, <dir>/cmf/CIE1964-10deg-XYZ.cmf and
+// (docs/architecture.md §2): <dir>/cmf/CIE1931-2deg-XYZ.cmf, <dir>/cmf/CIE1964-10deg-XYZ.cmf and
 // <dir>/illuminant/CIE-<name>.sp. <dir> is the environment variable GONIO_COLORD_DIR
 // when set, else the directory configured at build time (/usr/share/colord).
 //

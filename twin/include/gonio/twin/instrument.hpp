@@ -1,4 +1,4 @@
-// InstrumentProfile — every parameter of the instrument model (DESIGN §3).
+// InstrumentProfile — every parameter of the instrument model (docs/architecture.md §3).
 //
 // The built-in `gcms4` preset carries the numbers of the founding paper. Angles are full
 // angles in degrees, lengths in mm. Axes of a rectangle are (in-plane, perpendicular): the

@@ -11,7 +11,7 @@
 //                    (Rusinkiewicz 1998, "A New Change of Variables for Efficient BRDF
 //                    Representation")
 //
-// Frame (DESIGN §2): normal +z, wi toward the source, wo toward the receiver, both pointing
+// Frame (docs/architecture.md §2): normal +z, wi toward the source, wo toward the receiver, both pointing
 // away from the surface. An empty p1 makes the table isotropic and p3 the azimuth of wo
 // relative to that of wi (φo − φi), so p3 = 180° is the forward (specular) side of the plane
 // of incidence and p3 = 0° the backward side. For the instrument's in-plane geometry
@@ -51,13 +51,19 @@
 #include <utility>
 #include <vector>
 
+#include "gonio/proto/enum_text.hpp"
 #include "gonio/twin/bsdf.hpp"
 
 namespace gonio::twin {
 
 enum class TableParam { spherical, specular, half_difference };
 
-std::string_view to_string(TableParam p) noexcept;
+inline constexpr EnumNames<TableParam, 3> kTableParamNames{{
+    {TableParam::spherical, "spherical"},
+    {TableParam::specular, "specular"},
+    {TableParam::half_difference, "half_difference"},
+}};
+constexpr const auto& enum_names(TableParam) { return kTableParamNames; }  // proto/enum_text.hpp
 
 struct TableReduction {
   bool bilateral = false;

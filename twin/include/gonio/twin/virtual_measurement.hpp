@@ -15,7 +15,7 @@ namespace gonio::twin {
 AngularGrid measurement_grid(double theta_step_deg, double phi_step_deg,
                              double max_theta_deg = 85);
 
-// Geometry of a grid node in the DESIGN §2 frame (wi at φi = 0).
+// Geometry of a grid node in the docs/architecture.md §2 frame (wi at φi = 0).
 Geometry node_geometry(double theta_i, double theta_o, double phi_o_relative);
 
 // Predicts every node (reflection only) and tabulates f = β/π on the twin's wavelengths.

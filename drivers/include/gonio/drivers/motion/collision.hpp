@@ -1,7 +1,7 @@
 // MotionGuard — soft limits of every axis and the collision guard of the two arms,
 // checked before a single byte of a move reaches a device.
 //
-// Arm geometry (DESIGN §2): the source direction for incidence θi is (−sin θi, 0, cos θi)
+// Arm geometry (docs/architecture.md §2): the source direction for incidence θi is (−sin θi, 0, cos θi)
 // and the receiver direction for θr is (sin θr, 0, cos θr). Both arms turn in the plane
 // of measurement about the same axis, so the angle between them is the in-plane angle
 // between the two directions, |θi + θr| wrapped into [0°, 180°]. The arms collide when that

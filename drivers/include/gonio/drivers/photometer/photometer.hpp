@@ -1,4 +1,4 @@
-// Photometer — the detector side of the instrument (DESIGN §4).
+// Photometer — the detector side of the instrument (docs/architecture.md §4).
 //
 // A photometer reads a spectrum of detector signal on its wavelength grid: the sample
 // channel, the reference channel (the white standard of a double-beam instrument) or the
@@ -24,6 +24,7 @@
 #include <string>
 #include <string_view>
 
+#include "gonio/proto/enum_text.hpp"
 #include "gonio/proto/spectrum.hpp"
 
 namespace gonio::drivers {
@@ -32,7 +33,12 @@ using std::chrono::milliseconds;
 
 enum class Channel { sample, reference, dark };
 
-std::string_view channel_name(Channel c) noexcept;  // "sample", "reference", "dark"
+inline constexpr EnumNames<Channel, 3> kChannelNames{{
+    {Channel::sample, "sample"},
+    {Channel::reference, "reference"},
+    {Channel::dark, "dark"},
+}};
+constexpr const auto& enum_names(Channel) { return kChannelNames; }  // proto/enum_text.hpp
 
 // *IDN? fields (IEEE 488.2 §10.14): manufacturer, model, serial number, firmware.
 struct Identity {

@@ -24,6 +24,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "gonio/proto/enum_text.hpp"
 #include "gonio/drivers/photometer/photometer.hpp"
 #include "gonio/drivers/transport/transport.hpp"
 
@@ -87,8 +88,11 @@ class Session {
 // ---- photometer driver -----------------------------------------------------------------
 
 enum class Preset { gonio, pm100 };
-std::string_view preset_name(Preset p) noexcept;
-Preset preset_from_name(std::string_view name, std::string_view field = "preset");
+inline constexpr EnumNames<Preset, 2> kPresetNames{{
+    {Preset::gonio, "gonio"},
+    {Preset::pm100, "pm100"},
+}};
+constexpr const auto& enum_names(Preset) { return kPresetNames; }  // proto/enum_text.hpp
 
 struct PhotometerConfig {
   Preset preset = Preset::gonio;

@@ -1,5 +1,5 @@
 // The mock instrument — a virtual lab behind a MotionController and a Photometer, whose
-// readings come from the twin (DESIGN §4). Like every motion driver it checks no limits:
+// readings come from the twin (docs/architecture.md §4). Like every motion driver it checks no limits:
 // the registry wraps it in GuardedMotion (motion/guarded_motion.hpp).
 //
 // The lab holds a hidden "true" sample (a BSDF spec that may differ from the catalog's),
