@@ -51,11 +51,15 @@ void Instrument::start_run(const Scan& scan) {
   const auto sample = store_.sample(scan.plan.sample_id);
   r->tolerance = sample ? sample->spec.tolerance : 0;
   r->sample_id = scan.plan.sample_id;
+  // One profile for the whole run, even if a calibration replaces it meanwhile.
+  auto snap = twin_.snapshot();
+  r->twin_version = snap.twin_version;
+  r->reference_beta = snap.profile.reference_beta;
   if (!sample || !sample->spec.bsdf) {
     r->prediction_note = "the sample has no reference BSDF: measured without predictions";
   } else {
     try {
-      auto tw = twin_.make(*sample->spec.bsdf, scan.plan.wavelengths, "sample.bsdf");
+      auto tw = twin_.make(*sample->spec.bsdf, scan.plan.wavelengths, "sample.bsdf", snap.profile);
       if (r->next < scan.points_total)
         r->batch = twin_.batch(std::move(tw), scan.plan.geometries, scan.plan.geometry_index(r->next));
     } catch (const Error& e) {
@@ -277,7 +281,7 @@ void Instrument::step() {
                                         .dark = dark.spectrum,
                                         .reference = r.reference->spectrum,
                                         .reference_dark = r.reference_dark->spectrum},
-                           twin_.profile().reference_beta, plan.wavelengths);
+                           r.reference_beta, plan.wavelengths);
   } catch (const Error& e) {
     if (e.code() != Errc::protocol_error && e.code() != Errc::device_alarm) throw;
     on_device_fault(e);
@@ -307,7 +311,7 @@ void Instrument::step() {
     try {
       const auto pred = r.batch->wait(gi);
       p.predicted = pred.spectrum();
-      p.twin_version = twin_.version();
+      p.twin_version = r.twin_version;
       if (!pred.diagnostics.converged) p.flags.push_back("prediction_unconverged");
     } catch (const Error& e) {
       p.flags.push_back("prediction_failed");

@@ -22,6 +22,8 @@ struct Instrument::Run {
   std::shared_ptr<TwinService::Batch> batch;
   std::shared_ptr<const twin::Colorimeter> colorimeter;
   std::string prediction_note;  // why there are no predictions
+  std::string twin_version;     // of the profile the run started with
+  double reference_beta = 1.0;  // that profile's β of the reference white
   std::size_t next = 0;         // next point index to measure
   std::size_t since_start = 0;  // points measured in this run
   std::optional<drivers::Reading> reference, reference_dark;

@@ -217,6 +217,27 @@ CREATE TABLE tokens (
 CREATE INDEX scans_by_state ON scans(state, queue_pos);
 CREATE INDEX alerts_open ON alerts(dedup_key) WHERE acknowledged = 0;
 )sql",
+    // 2 -> 3: the inverse twin's results (scan.fit, instrument.calibrate) and the versioned
+    // instrument profiles that calibrations produce.
+    R"sql(
+CREATE TABLE fits (
+  id INTEGER PRIMARY KEY,
+  scan_id INTEGER NOT NULL REFERENCES scans(id),
+  kind TEXT NOT NULL,
+  model TEXT NOT NULL,
+  created_by TEXT NOT NULL,
+  created_at TEXT NOT NULL,
+  result TEXT NOT NULL);
+CREATE INDEX fits_by_scan ON fits(scan_id, id);
+CREATE TABLE profiles (
+  version INTEGER PRIMARY KEY,
+  name TEXT NOT NULL,
+  scan_id INTEGER REFERENCES scans(id),
+  fit_id INTEGER REFERENCES fits(id),
+  created_by TEXT NOT NULL,
+  created_at TEXT NOT NULL,
+  profile TEXT NOT NULL);
+)sql",
 };
 static_assert(std::size(kMigrations) == Store::kSchemaVersion);
 
@@ -806,6 +827,127 @@ std::vector<AuditEvent> Store::audit_events(std::size_t offset, std::size_t limi
 }
 
 // ---- tokens ----------------------------------------------------------------------------
+
+// ---- fits and profiles -----------------------------------------------------------------
+
+namespace {
+
+constexpr const char* kFitColumns = "id, scan_id, kind, model, created_by, created_at, result";
+
+StoredFit read_fit(const Stmt& s) {
+  StoredFit f;
+  f.id = s.i64(0);
+  f.scan_id = s.i64(1);
+  f.kind = s.text(2);
+  f.model = s.text(3);
+  f.created_by = s.text(4);
+  f.created_at = s.text(5);
+  try {
+    f.result = json::parse(s.text(6));
+  } catch (const std::exception& e) {
+    throw Error(Errc::internal, fmt::format("store: fit {} is unreadable: {}", f.id, e.what()));
+  }
+  return f;
+}
+
+constexpr const char* kProfileColumns =
+    "version, name, scan_id, fit_id, created_by, created_at, profile";
+
+StoredProfile read_profile(const Stmt& s) {
+  StoredProfile p;
+  p.version = s.i64(0);
+  p.name = s.text(1);
+  p.scan_id = s.opt_i64(2);
+  p.fit_id = s.opt_i64(3);
+  p.created_by = s.text(4);
+  p.created_at = s.text(5);
+  try {
+    p.profile = json::parse(s.text(6));
+  } catch (const std::exception& e) {
+    throw Error(Errc::internal,
+                fmt::format("store: profile version {} is unreadable: {}", p.version, e.what()));
+  }
+  return p;
+}
+
+}  // namespace
+
+StoredFit Store::insert_fit(std::int64_t scan_id, const std::string& kind, const std::string& model,
+                            const nlohmann::json& result, const std::string& actor) {
+  StoredFit f;
+  f.scan_id = scan_id;
+  f.kind = kind;
+  f.model = model;
+  f.created_by = actor;
+  f.created_at = utc::now();
+  f.result = result;
+  std::lock_guard lock(write_mu_);
+  Transaction tx(*writer_);
+  Stmt(*writer_, "INSERT INTO fits(scan_id, kind, model, created_by, created_at, result) "
+                 "VALUES (?, ?, ?, ?, ?, ?)")
+      .bind(1, scan_id)
+      .bind(2, kind)
+      .bind(3, model)
+      .bind(4, actor)
+      .bind(5, f.created_at)
+      .bind(6, result.dump())
+      .run();
+  f.id = sqlite3_last_insert_rowid(writer_->db);
+  audit_in(*writer_, actor, kind == "calibrate" ? "instrument.calibrate" : "scan.fit",
+           fmt::format("scan:{}", scan_id), json{{"fit", f.id}, {"model", model}});
+  tx.commit();
+  return f;
+}
+
+std::vector<StoredFit> Store::fits(std::int64_t scan_id, std::size_t limit) const {
+  auto c = read();
+  Stmt s(*c, fmt::format("SELECT {} FROM fits WHERE scan_id = ? ORDER BY id DESC LIMIT ?",
+                         kFitColumns));
+  s.bind(1, scan_id).bind(2, limit);
+  std::vector<StoredFit> out;
+  while (s.step()) out.push_back(read_fit(s));
+  return out;
+}
+
+StoredProfile Store::insert_profile(const std::string& name, const nlohmann::json& profile,
+                                    std::optional<std::int64_t> scan_id,
+                                    std::optional<std::int64_t> fit_id, const std::string& actor) {
+  StoredProfile p;
+  p.name = name;
+  p.scan_id = scan_id;
+  p.fit_id = fit_id;
+  p.created_by = actor;
+  p.created_at = utc::now();
+  p.profile = profile;
+  std::lock_guard lock(write_mu_);
+  Transaction tx(*writer_);
+  {
+    Stmt s(*writer_, "SELECT COALESCE(MAX(version), 0) FROM profiles");
+    p.version = s.step() ? s.i64(0) + 1 : 1;
+  }
+  Stmt(*writer_, "INSERT INTO profiles(version, name, scan_id, fit_id, created_by, created_at, "
+                 "profile) VALUES (?, ?, ?, ?, ?, ?, ?)")
+      .bind(1, p.version)
+      .bind(2, name)
+      .bind(3, scan_id)
+      .bind(4, fit_id)
+      .bind(5, actor)
+      .bind(6, p.created_at)
+      .bind(7, profile.dump())
+      .run();
+  audit_in(*writer_, actor, "profile.create", fmt::format("profile:{}", p.version),
+           json{{"name", name}, {"scan", scan_id ? json(*scan_id) : json(nullptr)}});
+  tx.commit();
+  return p;
+}
+
+std::optional<StoredProfile> Store::latest_profile() const {
+  auto c = read();
+  Stmt s(*c, fmt::format("SELECT {} FROM profiles ORDER BY version DESC LIMIT 1",
+                         kProfileColumns));
+  if (!s.step()) return std::nullopt;
+  return read_profile(s);
+}
 
 void Store::put_token(const TokenEntry& t) {
   std::lock_guard lock(write_mu_);

@@ -14,6 +14,44 @@
 
 namespace gonio::daemon {
 
+namespace {
+
+std::string make_version(const twin::EstimatorOptions& o, const std::string& profile,
+                         std::int64_t profile_version) {
+  return fmt::format("gonio-twin {} rqmc rel_se={} R={} seed={} profile={}{}", GONIO_VERSION_STRING,
+                     text::format_number(o.rel_se), o.replicates, o.seed, profile,
+                     profile_version ? fmt::format("#{}", profile_version) : std::string());
+}
+
+}  // namespace
+
+twin::InstrumentProfile TwinService::profile() const {
+  std::lock_guard lock(profile_mu_);
+  return profile_;
+}
+
+std::int64_t TwinService::profile_version() const {
+  std::lock_guard lock(profile_mu_);
+  return profile_version_;
+}
+
+std::string TwinService::version() const {
+  std::lock_guard lock(profile_mu_);
+  return version_;
+}
+
+TwinService::Snapshot TwinService::snapshot() const {
+  std::lock_guard lock(profile_mu_);
+  return Snapshot{profile_, profile_version_, version_};
+}
+
+void TwinService::set_profile(twin::InstrumentProfile profile, std::int64_t version) {
+  std::lock_guard lock(profile_mu_);
+  version_ = make_version(options_, profile.name, version);
+  profile_ = std::move(profile);
+  profile_version_ = version;
+}
+
 TwinService::TwinService(const Config& config, twin::InstrumentProfile profile)
     : profile_(std::move(profile)) {
   options_.rel_se = config.twin_rel_se;
@@ -21,9 +59,7 @@ TwinService::TwinService(const Config& config, twin::InstrumentProfile profile)
   options_.replicates = config.twin_replicates;
   options_.seed = config.twin_seed;
   options_.validate();
-  version_ = fmt::format("gonio-twin {} rqmc rel_se={} R={} seed={} profile={}", GONIO_VERSION_STRING,
-                         text::format_number(options_.rel_se), options_.replicates, options_.seed,
-                         profile_.name);
+  version_ = make_version(options_, profile_.name, 0);
   unsigned n = config.twin_threads ? config.twin_threads : std::thread::hardware_concurrency();
   n = std::max(1u, n);
   for (unsigned i = 0; i < n; ++i) workers_.emplace_back([this] { work(); });
@@ -68,8 +104,15 @@ std::size_t TwinService::queued() const {
 std::shared_ptr<const twin::Twin> TwinService::make(const std::string& bsdf,
                                                     const WavelengthGrid& grid,
                                                     const std::string& field) const {
+  return make(bsdf, grid, field, profile());
+}
+
+std::shared_ptr<const twin::Twin> TwinService::make(const std::string& bsdf,
+                                                    const WavelengthGrid& grid,
+                                                    const std::string& field,
+                                                    const twin::InstrumentProfile& profile) const {
   try {
-    return std::make_shared<const twin::Twin>(profile_, twin::make_bsdf(bsdf, grid), grid);
+    return std::make_shared<const twin::Twin>(profile, twin::make_bsdf(bsdf, grid), grid);
   } catch (const Error& e) {
     // The twin names its fields "bsdf…"; put ours in their place ("sample.bsdf.lambert.albedo").
     if (field == "bsdf") throw;

@@ -1,4 +1,4 @@
-// gonioctl scan: submit, get, list, pause, resume, cancel, points, export, watch.
+// gonioctl scan: submit, get, list, pause, resume, cancel, points, export, fit, watch.
 #include <cmath>
 #include <cstdint>
 #include <fstream>
@@ -69,9 +69,37 @@ struct ScanArgs {
   std::string reason;
   std::size_t offset = 0, limit = 100;
   std::string format = "csv", output;
+  std::string model;
+  std::uint64_t samples = 0;
 };
 
 }  // namespace
+
+void fit_human(const json& f) {
+  const auto& r = f["result"];
+  std::cout << fmt::format("{} {} of scan {}: {}\n", cell(r["kind"]), cell(f["id"]), cell(f["scan"]),
+                           cell(r["status"]));
+  Table t({"parameter", "value", "±u", "start", "bounds", "notes"});
+  for (const auto& p : r["parameters"]) {
+    std::string notes;
+    if (p.value("at_bound", false)) notes = "at bound";
+    if (!p.value("identifiable", true)) notes += (notes.empty() ? "" : ", ") + std::string("not identifiable");
+    t.add({cell(p["name"]), cell(p["value"]), p["u"].is_null() ? "-" : cell(p["u"]), cell(p["start"]),
+           fmt::format("[{}, {}]", cell(p["bounds"][0]), cell(p["bounds"][1])), notes});
+  }
+  std::cout << t.render();
+  std::cout << fmt::format("  spec {}\n  chi2/dof {} (dof {})  evaluations {}  {} s\n", cell(r["spec"]),
+                           cell(r["chi2_per_dof"]), cell(r["dof"]), cell(r["evaluations"]),
+                           cell(r["seconds"]));
+  if (r.contains("naive") && r["naive"].is_object() && r["naive"].contains("parameters")) {
+    std::string naive;
+    for (const auto& p : r["naive"]["parameters"])
+      naive += fmt::format("{}{} = {}", naive.empty() ? "" : ", ", cell(p["name"]), cell(p["value"]));
+    std::cout << fmt::format("  without the instrument: {} (chi2/dof {})\n", naive,
+                             cell(r["naive"]["chi2_per_dof"]));
+  }
+  for (const auto& w : r["warnings"]) std::cout << "  warning: " << cell(w) << "\n";
+}
 
 void scans_table(const json& list) {
   Table t({"id", "state", "sample", "points", "diverged", "priority", "submitted", "reason"});
@@ -187,6 +215,19 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
         std::cout << json{{"file", path}, {"format", r["format"]}, {"points", r["points"]}}.dump(2) << "\n";
       else
         std::cout << fmt::format("wrote {} ({} points, {})\n", path, cell(r["points"]), cell(r["format"]));
+      return 0;
+    };
+  });
+  auto* fit = id_cmd("fit", "fit a BSDF model's free ('?') parameters to the scan through the twin");
+  fit->add_option("--model", a->model, "BSDF spec with '?' marks, e.g. 'conductor:alpha=?,eta=0.2,k=3.9'")
+      ->required();
+  fit->add_option("--samples", a->samples, "twin paths per geometry and evaluation (default 8192)");
+  fit->callback([&ctx, a] {
+    ctx.action = [a](Session& s) {
+      json p{{"scan", a->id}, {"model", a->model}};
+      if (a->samples) p["samples"] = a->samples;
+      const auto r = s.call("scan.fit", p);
+      print(s.options(), r, [&] { fit_human(r); });
       return 0;
     };
   });

@@ -67,6 +67,8 @@ void add_demo_commands(CLI::App& app, Context& ctx);        // demo
 nlohmann::json sample_ref(const std::string& text);
 // The table of scans that `scan list` and `queue status` print.
 void scans_table(const nlohmann::json& list);
+// A stored fit (scan.fit, instrument.calibrate): parameters, χ², naive fit, warnings.
+void fit_human(const nlohmann::json& fit);
 
 // Prints a result: JSON (pretty) with --json, else `human`.
 void print(const Options& o, const nlohmann::json& result, const std::function<void()>& human);

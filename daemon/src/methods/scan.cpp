@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 
 #include "gonio/daemon/export.hpp"
+#include "methods/inverse.hpp"
 #include "methods/params.hpp"
 #include "methods/registrar.hpp"
 
@@ -72,7 +73,11 @@ void register_scan(MethodRegistrar& reg, Services& s) {
     const auto id = read_id(r, "scan");
     const auto geometries = r.optional<bool>("geometries", false);
     r.finish();
-    return to_json(require_scan(s.store, id), geometries);
+    json out = to_json(require_scan(s.store, id), geometries);
+    json fits = json::array();
+    for (const auto& f : s.store.fits(id, methods::kFitsShown)) fits.push_back(methods::fit_json(f));
+    out["fits"] = std::move(fits);
+    return out;
   });
 
   reg.add("scan.list", [&s](rpc::Call& c) {
@@ -137,6 +142,31 @@ void register_scan(MethodRegistrar& reg, Services& s) {
     const auto e = export_scan(scan, points, format);
     return json{{"scan", id}, {"format", e.format}, {"filename", e.filename},
                 {"media_type", e.media_type}, {"points", points.size()}, {"content", e.content}};
+  });
+
+  // The inverse twin on a stored scan: the model's free parameters fitted through the twin
+  // of the current instrument profile; the result is stored with the scan.
+  reg.add("scan.fit", [&s](rpc::Call& c) {
+    ObjectReader r(c.params, "");
+    const auto id = read_id(r, "scan");
+    const auto model = r.required<std::string>("model");
+    auto options = methods::read_fit_options(r, s.twin);
+    r.finish();
+    if (model.empty() || model.size() > 4096)
+      throw Error::invalid("model", "give a BSDF spec of 1 to 4096 characters with '?' marks");
+    const auto data = methods::measured_of_scan(s.store, id);
+    // The template alone first: a bad spec is refused before any twin work.
+    (void)methods::with_field("model", [&] { return twin::ModelTemplate(model, data.wavelengths); });
+    const auto profile = s.twin.profile();
+    const auto result = methods::with_field(
+        "model", [&] { return twin::fit_material(data, model, profile, options); });
+    const auto stored = s.store.insert_fit(id, "fit", model, result.to_json(), actor(c));
+    spdlog::info("scan {} fitted by {}: '{}' -> '{}', chi2/dof {:.3g}, {} evaluations, {:.1f} s",
+                 id, actor(c), model, result.spec, result.chi2_per_dof, result.evaluations,
+                 result.seconds);
+    json out = methods::fit_json(stored);
+    out["scan"] = id;
+    return out;
   });
 }
 

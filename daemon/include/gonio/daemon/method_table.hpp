@@ -50,6 +50,7 @@ inline constexpr std::array kMethodTable{
     MethodSpec{"scan.cancel", Role::technician, true},
     MethodSpec{"scan.points", Role::viewer, false},
     MethodSpec{"scan.export", Role::viewer, true},
+    MethodSpec{"scan.fit", Role::technician, true},
     // queue
     MethodSpec{"queue.status", Role::viewer, false},
     MethodSpec{"queue.reorder", Role::technician, false},

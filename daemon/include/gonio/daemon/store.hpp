@@ -2,7 +2,8 @@
 //
 // Tables: samples, scans (plan as JSON, state, queue position), points (one row per
 // measured point, primary key (scan_id, idx), so a point can never be stored twice),
-// alerts, audit (who did what, when) and tokens (hashes only). The schema version is
+// alerts, audit (who did what, when), tokens (hashes only), fits (inverse-twin results per
+// scan) and profiles (calibrated instrument profiles, versioned). The schema version is
 // PRAGMA user_version; migrations run in order inside a transaction at open, and a file
 // written by a newer goniod is refused rather than guessed at.
 //
@@ -50,6 +51,25 @@ struct AlertDraft {
   std::string message;
 };
 
+// A result of the inverse twin kept with its scan (scan.fit, instrument.calibrate).
+struct StoredFit {
+  std::int64_t id = 0;
+  std::int64_t scan_id = 0;
+  std::string kind;   // "fit" or "calibrate"
+  std::string model;  // the model spec (fit) or the known sample's spec (calibrate)
+  std::string created_by, created_at;
+  nlohmann::json result;  // gonio::twin::FitResult::to_json()
+};
+
+// An instrument profile made by a calibration; versions count up from 1.
+struct StoredProfile {
+  std::int64_t version = 0;
+  std::string name;
+  std::optional<std::int64_t> scan_id, fit_id;  // the calibration that made it
+  std::string created_by, created_at;
+  nlohmann::json profile;  // gonio::twin::InstrumentProfile as JSON
+};
+
 struct ScanFilter {
   std::optional<ScanState> state;
   std::optional<std::int64_t> sample_id;
@@ -65,7 +85,7 @@ struct AlertFilter {
 
 class Store {
  public:
-  static constexpr int kSchemaVersion = 2;
+  static constexpr int kSchemaVersion = 3;
 
   // Opens (creating) the database; runs migrations. Throws Error(io_error) when the file
   // cannot be opened, Error(unsupported) when it is newer than this build.
@@ -128,6 +148,17 @@ class Store {
   std::vector<Alert> alerts(const AlertFilter& filter) const;
   // Throws Error(not_found); acknowledging twice is allowed and keeps the first ack.
   Alert ack_alert(std::int64_t id, const std::string& actor);
+
+  // ---- fits and profiles
+  StoredFit insert_fit(std::int64_t scan_id, const std::string& kind, const std::string& model,
+                       const nlohmann::json& result, const std::string& actor);
+  // The scan's fits, newest first.
+  std::vector<StoredFit> fits(std::int64_t scan_id, std::size_t limit) const;
+  // Stores `profile` as the next version (audited).
+  StoredProfile insert_profile(const std::string& name, const nlohmann::json& profile,
+                               std::optional<std::int64_t> scan_id,
+                               std::optional<std::int64_t> fit_id, const std::string& actor);
+  std::optional<StoredProfile> latest_profile() const;
 
   // ---- audit
   void audit(const std::string& actor, const std::string& action, const std::string& target,

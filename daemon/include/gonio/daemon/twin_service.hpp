@@ -33,15 +33,34 @@ class TwinService {
   TwinService(const TwinService&) = delete;
   TwinService& operator=(const TwinService&) = delete;
 
-  const twin::InstrumentProfile& profile() const noexcept { return profile_; }
+  // The current instrument profile (a copy: a calibration may replace it at any time).
+  twin::InstrumentProfile profile() const;
+  // Its version in the store (0: the configured profile, not calibrated).
+  std::int64_t profile_version() const;
+  // Replaces the profile for twins made from now on (scans started later, twin.predict);
+  // twins already made keep theirs.
+  void set_profile(twin::InstrumentProfile profile, std::int64_t version);
   const twin::EstimatorOptions& options() const noexcept { return options_; }
   unsigned threads() const noexcept { return static_cast<unsigned>(workers_.size()); }
-  // "gonio-twin <version> rqmc rel_se=0.002 R=16 seed=1 profile=gcms4"
-  const std::string& version() const noexcept { return version_; }
+  // "gonio-twin <version> rqmc rel_se=0.002 R=16 seed=1 profile=gcms4"; a calibrated
+  // profile adds its version: "profile=gcms4#2".
+  std::string version() const;
+
+  // The profile with its version and version() at one instant (what a scan runs with).
+  struct Snapshot {
+    twin::InstrumentProfile profile;
+    std::int64_t profile_version = 0;
+    std::string twin_version;
+  };
+  Snapshot snapshot() const;
 
   // A twin for a BSDF spec on `grid`; throws Error naming `field` (e.g. "bsdf").
   std::shared_ptr<const twin::Twin> make(const std::string& bsdf, const WavelengthGrid& grid,
                                          const std::string& field = "bsdf") const;
+  // The same with a given profile (a snapshot's).
+  std::shared_ptr<const twin::Twin> make(const std::string& bsdf, const WavelengthGrid& grid,
+                                         const std::string& field,
+                                         const twin::InstrumentProfile& profile) const;
 
   class Batch {
    public:
@@ -79,9 +98,11 @@ class TwinService {
   void post(std::function<void()> task);
   void work();
 
+  mutable std::mutex profile_mu_;
   twin::InstrumentProfile profile_;
-  twin::EstimatorOptions options_;
+  std::int64_t profile_version_ = 0;
   std::string version_;
+  twin::EstimatorOptions options_;
   mutable std::mutex mu_;
   std::condition_variable cv_;
   std::deque<std::function<void()>> tasks_;
