@@ -49,22 +49,27 @@ Scan Instrument::transition(std::int64_t id, ScanState to, const std::string& re
   return sc;
 }
 
+// A pause or cancel of the scan that is running is the runner's to carry out between points:
+// hand it over and wait (at most a minute) until the runner has let go of the scan. Empty
+// when `id` is not the running scan.
+std::optional<Scan> Instrument::control_running(std::int64_t id, Control what, const std::string& reason,
+                                                const std::string& actor, std::unique_lock<std::mutex>& sched) {
+  std::unique_lock lock(mu_);
+  if (running_ != id) return std::nullopt;
+  control_ = what;
+  control_reason_ = reason;
+  control_actor_ = actor;
+  sched.unlock();
+  cv_.notify_all();
+  cv_.wait_for(lock, std::chrono::seconds(60), [&] { return running_ != id; });
+  lock.unlock();
+  return stored_scan(id);
+}
+
 Scan Instrument::pause(std::int64_t id, const std::string& actor, const std::string& reason) {
   std::unique_lock sched(sched_mu_);
   const auto sc = stored_scan(id);
-  {
-    std::unique_lock lock(mu_);
-    if (running_ == id) {
-      control_ = Control::pause;
-      control_reason_ = reason;
-      control_actor_ = actor;
-      sched.unlock();
-      cv_.notify_all();
-      cv_.wait_for(lock, std::chrono::seconds(60), [&] { return running_ != id; });
-      lock.unlock();
-      return *store_.scan(id);
-    }
-  }
+  if (auto done = control_running(id, Control::pause, reason, actor, sched)) return *std::move(done);
   if (sc.state == ScanState::paused) return sc;
   if (sc.state != ScanState::queued && sc.state != ScanState::interrupted)
     throw Error::wrong_state("scan", fmt::format("scan {} is {}; only queued, running or "
@@ -98,19 +103,7 @@ Scan Instrument::resume(std::int64_t id, const std::string& actor) {
 Scan Instrument::cancel(std::int64_t id, const std::string& actor, const std::string& reason) {
   std::unique_lock sched(sched_mu_);
   const auto sc = stored_scan(id);
-  {
-    std::unique_lock lock(mu_);
-    if (running_ == id) {
-      control_ = Control::cancel;
-      control_reason_ = reason;
-      control_actor_ = actor;
-      sched.unlock();
-      cv_.notify_all();
-      cv_.wait_for(lock, std::chrono::seconds(60), [&] { return running_ != id; });
-      lock.unlock();
-      return *store_.scan(id);
-    }
-  }
+  if (auto done = control_running(id, Control::cancel, reason, actor, sched)) return *std::move(done);
   if (is_final(sc.state))
     throw Error::wrong_state("scan", fmt::format("scan {} is already {}", id, to_text(sc.state)));
   return transition(id, ScanState::cancelled, reason, actor);

@@ -150,6 +150,8 @@ class Instrument {
   std::unique_ptr<Run> run_;
   std::optional<std::int64_t> running_;
   enum class Control { none, pause, cancel };
+  std::optional<Scan> control_running(std::int64_t id, Control what, const std::string& reason,
+                                      const std::string& actor, std::unique_lock<std::mutex>& sched);
   Control control_ = Control::none;
   std::string control_reason_, control_actor_;
   bool fault_latched_ = false;
