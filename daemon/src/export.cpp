@@ -125,11 +125,12 @@ ExportResult export_scan(const Scan& scan, const std::vector<PointRecord>& point
     const auto comment = fmt::format("gonio scan {} (sample {}), measured BRDF f = beta/pi",
                                      scan.id, scan.plan.sample_id);
     if (format == "bsdf") {
-      // IS-SA Monochrome holds one value per node: the luminance factor of the spectrum.
+      // A spectral scan keeps its colour: IS-SA XYZ blocks (D65, 10° observer, Y = the
+      // luminance factor), as gonio-twin convert writes them; a single channel is Monochrome.
       twin::IssaWriteOptions o;
-      o.weights = twin::luminance_weights(table.wavelengths());
-      o.comment = o.weights.empty() ? comment
-                                    : comment + "; Monochrome = luminance factor (D65, 10 deg)";
+      o.xyz_weights = twin::xyz_weights(table.wavelengths());
+      o.comment = o.xyz_weights ? comment + "; XYZ: CIE 1964 10 deg observer, D65; Y = luminance factor"
+                                : comment;
       twin::write_issa(os, table, false, o);
     } else {
       twin::TabulatedParts parts;

@@ -73,6 +73,9 @@ TEST(Export, IssaWritesAndNegativeNoiseIsClamped) {
   std::istringstream in(e.content);
   const auto parts = twin::read_issa(in, "export");
   EXPECT_TRUE(parts.brdf.has_value());
+  // A spectral scan keeps its colour: tristimulus blocks, not one grey channel.
+  EXPECT_NE(e.content.find("SpectralContent\tXYZ"), std::string::npos);
+  EXPECT_EQ(e.content.find("SpectralContent\tMonochrome"), std::string::npos);
 }
 
 TEST(Export, RejectsWhatIsNotATable) {

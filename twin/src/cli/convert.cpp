@@ -39,15 +39,8 @@ IssaWriteOptions issa_options(const TabulatedParts& parts, bool monochrome) {
   IssaWriteOptions o;
   const BsdfTable* t = main_table(parts);
   if (t == nullptr || t->wavelengths().size() < 2) return o;
-  if (!monochrome) {
-    const Colorimeter cm{WavelengthGrid(t->wavelengths(), "table.wavelengths")};
-    std::array<std::vector<double>, 3> w;
-    for (const auto& x : cm.weights()) {
-      w[0].push_back(x.x / 100);
-      w[1].push_back(x.y / 100);
-      w[2].push_back(x.z / 100);
-    }
-    o.xyz_weights = w;
+  if (!monochrome) o.xyz_weights = xyz_weights(t->wavelengths());
+  if (o.xyz_weights) {
     o.comment = "XYZ: CIE 1964 10 deg observer, D65; Y = luminance factor (1 for a white "
                 "diffuser of f = 1/pi)";
     return o;

@@ -134,4 +134,21 @@ std::vector<double> luminance_weights(const std::vector<double>& wavelengths_nm)
   return w;
 }
 
+std::optional<std::array<std::vector<double>, 3>> xyz_weights(const std::vector<double>& wavelengths_nm) {
+  if (wavelengths_nm.size() < 2) return std::nullopt;
+  std::optional<Colorimeter> c;
+  try {
+    c.emplace(WavelengthGrid(wavelengths_nm));
+  } catch (const Error&) {
+    return std::nullopt;  // no overlap with the colour-matching functions
+  }
+  std::array<std::vector<double>, 3> w;
+  for (const auto& x : c->weights()) {
+    w[0].push_back(x.x / 100);
+    w[1].push_back(x.y / 100);
+    w[2].push_back(x.z / 100);
+  }
+  return w;
+}
+
 }  // namespace gonio::twin

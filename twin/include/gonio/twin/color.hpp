@@ -14,6 +14,8 @@
 
 #include <memory>
 #include <span>
+#include <array>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -148,6 +150,10 @@ double delta_e2000(const Spectrum& s1, const Spectrum& s2, std::string_view illu
 // its luminance factor Y/100 for D65 and the 10° observer; empty when the grid has fewer than
 // two channels or misses the visible (then a plain mean is the only sensible grey).
 std::vector<double> luminance_weights(const std::vector<double>& wavelengths_nm);
+// Per-channel weights of X, Y and Z (D65, 10° observer) scaled so that Y of a non-selective
+// spectrum equals its value: a reflectance spectrum's XYZ/100. Empty under the same
+// conditions as luminance_weights (then only grey can be written).
+std::optional<std::array<std::vector<double>, 3>> xyz_weights(const std::vector<double>& wavelengths_nm);
 
 // sRGB (IEC 61966-2-1:1999). XYZ on the 0..1 scale (Y = 1 for the display white, D65,
 // CIE 1931 2° observer) to linear RGB; values outside [0, 1] are kept.
