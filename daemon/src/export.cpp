@@ -138,6 +138,8 @@ ExportResult export_scan(const Scan& scan, const std::vector<PointRecord>& point
       parts.name = scan.plan.name;
       twin::SsddWriteOptions o;
       o.comment = comment;
+      o.name_entry = false;  // the scan's name as a comment: readers do not use NAME
+      o.source = twin::SsddSource::measured;
       twin::write_ssdd(os, parts, o);
     }
     r.content = os.str();
