@@ -13,11 +13,6 @@ namespace gonio {
 namespace {
 
 template <typename T>
-nlohmann::json opt(const std::optional<T>& v) {
-  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
-}
-
-template <typename T>
 std::optional<T> read_opt(json_util::ObjectReader& r, const std::string& key) {
   const auto* v = r.raw(key);
   if (!v || v->is_null()) return std::nullopt;
@@ -31,16 +26,16 @@ void to_json(nlohmann::json& j, const Alert& a) {
                      {"kind", a.kind},
                      {"severity", to_text(a.severity)},
                      {"dedup_key", a.dedup_key},
-                     {"scan_id", opt(a.scan_id)},
-                     {"sample_id", opt(a.sample_id)},
-                     {"point_index", opt(a.point_index)},
+                     {"scan_id", json_util::or_null(a.scan_id)},
+                     {"sample_id", json_util::or_null(a.sample_id)},
+                     {"point_index", json_util::or_null(a.point_index)},
                      {"message", a.message},
                      {"first_at", a.first_at},
                      {"last_at", a.last_at},
                      {"count", a.count},
                      {"acknowledged", a.acknowledged},
                      {"acknowledged_by", a.acknowledged_by},
-                     {"acknowledged_at", opt(a.acknowledged_at)}};
+                     {"acknowledged_at", json_util::or_null(a.acknowledged_at)}};
 }
 
 void from_json(const nlohmann::json& j, Alert& a) {

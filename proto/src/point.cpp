@@ -7,14 +7,6 @@
 #include "gonio/proto/json_util.hpp"
 
 namespace gonio {
-namespace {
-
-template <typename T>
-nlohmann::json opt(const std::optional<T>& v) {
-  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
-}
-
-}  // namespace
 
 void to_json(nlohmann::json& j, const PointRecord& p) {
   j = nlohmann::json{{"scan_id", p.scan_id},
@@ -26,10 +18,10 @@ void to_json(nlohmann::json& j, const PointRecord& p) {
                      {"started_at", p.started_at},
                      {"finished_at", p.finished_at},
                      {"measured", p.measured},
-                     {"predicted", opt(p.predicted)},
+                     {"predicted", json_util::or_null(p.predicted)},
                      {"twin_version", p.twin_version},
-                     {"z_max", opt(p.z_max)},
-                     {"delta_e00", opt(p.delta_e00)},
+                     {"z_max", json_util::or_null(p.z_max)},
+                     {"delta_e00", json_util::or_null(p.delta_e00)},
                      {"diverged", p.diverged},
                      {"flags", p.flags}};
 }

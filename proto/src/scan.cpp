@@ -234,9 +234,6 @@ nlohmann::json to_json(const Scan& s, bool with_geometries) {
     plan.erase("geometries");
     plan["geometry_count"] = s.plan.geometries.size();
   }
-  const auto opt = [](const std::optional<std::string>& v) {
-    return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
-  };
   return nlohmann::json{{"id", s.id},
                         {"plan", std::move(plan)},
                         {"state", to_text(s.state)},
@@ -244,8 +241,8 @@ nlohmann::json to_json(const Scan& s, bool with_geometries) {
                         {"predicted", s.predicted},
                         {"submitted_by", s.submitted_by},
                         {"submitted_at", s.submitted_at},
-                        {"started_at", opt(s.started_at)},
-                        {"finished_at", opt(s.finished_at)},
+                        {"started_at", json_util::or_null(s.started_at)},
+                        {"finished_at", json_util::or_null(s.finished_at)},
                         {"points_total", s.points_total},
                         {"points_done", s.points_done},
                         {"points_diverged", s.points_diverged},

@@ -9,8 +9,6 @@
 namespace gonio::drivers::devsim {
 namespace {
 constexpr double kStep = 1e-3;  // s
-// Alarm code the AZ uses for invalid operation data.
-constexpr std::uint32_t kOperationDataError = 0x70;
 
 double sign(double x) { return x > 0 ? 1.0 : (x < 0 ? -1.0 : 0.0); }
 bool passed(double pos, double point, double dir) { return (pos - point) * dir >= 0; }

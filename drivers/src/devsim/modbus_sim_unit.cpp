@@ -14,8 +14,6 @@
 namespace gonio::drivers::devsim {
 namespace {
 
-// Alarm code the AZ uses for invalid operation data.
-constexpr std::uint32_t kOperationDataError = 0x70;
 
 // The image spans at least 0x200 registers and every register of the map.
 std::size_t image_size(const modbus::RegisterMap& m) {

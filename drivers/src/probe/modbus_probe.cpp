@@ -121,7 +121,7 @@ int exit_code(Errc c) {
   }
 }
 
-std::string hint(Errc c) {
+std::string modbus_hint(Errc c) {
   switch (c) {
     case Errc::disconnected:
     case Errc::io_error: return "check the cable, the port or address, and that nothing else holds it";
@@ -184,7 +184,7 @@ int run_modbus_axis(const ModbusAxisOptions& o, std::ostream& out, std::ostream&
     }
   } catch (const Error& e) {
     err << "error: " << reword(e.what(), who, cfg.links.front().describe()) << '\n';
-    if (const auto h = hint(e.code()); !h.empty()) err << "hint: " << h << '\n';
+    if (const auto h = modbus_hint(e.code()); !h.empty()) err << "hint: " << h << '\n';
     code = exit_code(e.code());
   } catch (const std::exception& e) {
     err << "error: " << e.what() << '\n';

@@ -19,7 +19,7 @@
 namespace gonio::drivers::probe {
 namespace {
 
-const char* hint(Errc c) {
+const char* scpi_hint(Errc c) {
   switch (c) {
     case Errc::not_found: return "is the device connected and powered, and the address right?";
     case Errc::disconnected: return "the link dropped: check the cable and the device";
@@ -101,12 +101,12 @@ int run_scpi(const ScpiOptions& o, std::ostream& out, std::ostream& err) {
       fmt::print(out, "{:g} {:.6g} {:.3g}\n", w[i], r.spectrum.values[i], r.spectrum.std_uncertainty[i]);
     }
     if (r.saturated) {
-      fmt::print(err, "error: the detector is saturated: {}\n", hint(Errc::saturated));
+      fmt::print(err, "error: the detector is saturated: {}\n", scpi_hint(Errc::saturated));
       return 6;
     }
     return 0;
   } catch (const Error& e) {
-    const auto h = hint(e.code());
+    const auto h = scpi_hint(e.code());
     fmt::print(err, "error: {}{}{}\n", e.what(), *h ? "\n  hint: " : "", h);
     return exit_code_for(e);
   } catch (const std::exception& e) {

@@ -6,14 +6,14 @@
 namespace gonio::twin::bsdf {
 namespace {
 
-BsdfPtr build(const Params& p, const WavelengthGrid& grid) {
+BsdfPtr build_beckmann(const Params& p, const WavelengthGrid& grid) {
   return make_rough_conductor(p, grid, Distribution::beckmann);
 }
 
 }  // namespace
 
 const ModelInfo& beckmann_model() {
-  static const ModelInfo info{"beckmann", conductor_params(), &build};
+  static const ModelInfo info{"beckmann", conductor_params(), &build_beckmann};
   return info;
 }
 

@@ -39,7 +39,7 @@ class Coat final : public Lobe {
   double ior_;
 };
 
-BsdfPtr build(const Params& p, const WavelengthGrid& grid) {
+BsdfPtr build_coat(const Params& p, const WavelengthGrid& grid) {
   return std::make_shared<Coat>(p, grid);
 }
 
@@ -49,7 +49,7 @@ const ModelInfo& coat_model() {
   static const ModelInfo info{"coat",
                               {{"alpha", false, 0.001, 1, false, 0.05, ""},
                                {"ior", false, 1, 4, false, 1.5, ""}},
-                              &build};
+                              &build_coat};
   return info;
 }
 

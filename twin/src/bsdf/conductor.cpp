@@ -53,7 +53,7 @@ class RoughConductor final : public Lobe {
   std::vector<double> eta_, k_;
 };
 
-BsdfPtr build(const Params& p, const WavelengthGrid& grid) {
+BsdfPtr build_conductor(const Params& p, const WavelengthGrid& grid) {
   return make_rough_conductor(p, grid, Distribution::ggx);
 }
 
@@ -72,7 +72,7 @@ std::vector<ParamInfo> conductor_params() {
 }
 
 const ModelInfo& conductor_model() {
-  static const ModelInfo info{"conductor", conductor_params(), &build};
+  static const ModelInfo info{"conductor", conductor_params(), &build_conductor};
   return info;
 }
 

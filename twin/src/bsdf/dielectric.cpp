@@ -123,7 +123,7 @@ class RoughDielectric final : public Lobe {
   double ior_;
 };
 
-BsdfPtr build(const Params& p, const WavelengthGrid& grid) {
+BsdfPtr build_dielectric(const Params& p, const WavelengthGrid& grid) {
   return std::make_shared<RoughDielectric>(p, grid);
 }
 
@@ -133,7 +133,7 @@ const ModelInfo& dielectric_model() {
   static const ModelInfo info{"dielectric",
                               {{"alpha", false, 0.001, 1, false, 0.1, ""},
                                {"ior", false, 1, 4, false, 1.5, ""}},
-                              &build};
+                              &build_dielectric};
   return info;
 }
 

@@ -33,14 +33,14 @@ class Lambert final : public Lobe {
   double mean_;
 };
 
-BsdfPtr build(const Params& p, const WavelengthGrid& grid) {
+BsdfPtr build_lambert(const Params& p, const WavelengthGrid& grid) {
   return std::make_shared<Lambert>(p, grid);
 }
 
 }  // namespace
 
 const ModelInfo& lambert_model() {
-  static const ModelInfo info{"lambert", {{"albedo", true, 0, 1, false, 1.0, ""}}, &build};
+  static const ModelInfo info{"lambert", {{"albedo", true, 0, 1, false, 1.0, ""}}, &build_lambert};
   return info;
 }
 

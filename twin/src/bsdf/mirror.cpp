@@ -31,14 +31,14 @@ class Mirror final : public Lobe {
   std::vector<double> reflectance_;
 };
 
-BsdfPtr build(const Params& p, const WavelengthGrid& grid) {
+BsdfPtr build_mirror(const Params& p, const WavelengthGrid& grid) {
   return std::make_shared<Mirror>(p, grid);
 }
 
 }  // namespace
 
 const ModelInfo& mirror_model() {
-  static const ModelInfo info{"mirror", {{"reflectance", true, 0, 1, false, 1.0, ""}}, &build};
+  static const ModelInfo info{"mirror", {{"reflectance", true, 0, 1, false, 1.0, ""}}, &build_mirror};
   return info;
 }
 

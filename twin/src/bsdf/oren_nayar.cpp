@@ -59,7 +59,7 @@ class OrenNayar final : public Lobe {
   double a_ = 1, b_ = 0;
 };
 
-BsdfPtr build(const Params& p, const WavelengthGrid& grid) {
+BsdfPtr build_oren_nayar(const Params& p, const WavelengthGrid& grid) {
   return std::make_shared<OrenNayar>(p, grid);
 }
 
@@ -69,7 +69,7 @@ const ModelInfo& oren_nayar_model() {
   static const ModelInfo info{"oren-nayar",
                               {{"albedo", true, 0, 1, false, 0.8, ""},
                                {"sigma", false, 0, 90, false, 20.0, " deg"}},
-                              &build};
+                              &build_oren_nayar};
   return info;
 }
 

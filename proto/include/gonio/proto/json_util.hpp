@@ -9,6 +9,7 @@
 // Errors are gonio::Error(invalid_argument) whose field is "<context>.<key>".
 #pragma once
 
+#include <optional>
 #include <set>
 #include <string>
 #include <string_view>
@@ -25,6 +26,12 @@ namespace gonio::json_util {
 Error prefixed(const Error& e, std::string_view prefix);
 
 std::string type_name(const nlohmann::json& j);
+
+// An optional as JSON: the value, or null when absent.
+template <typename T>
+nlohmann::json or_null(const std::optional<T>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
 
 template <typename T>
 T get_as(const nlohmann::json& j, const std::string& field) {

@@ -70,6 +70,9 @@ struct SimAxisConfig {
   std::optional<SimFault> stall_at_move;
 };
 
+// Alarm code the AZ uses for invalid operation data.
+inline constexpr std::uint32_t kOperationDataError = 0x70;
+
 // The motion model of one axis, in steps and seconds; no I/O, no clock of its own.
 class SimAxis {
  public:
