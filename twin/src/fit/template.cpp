@@ -5,6 +5,7 @@
 // each sentinel landed in, so the template follows the spec syntax exactly without a second
 // parser. The models' parameter tables give the default start and bounds.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -76,6 +77,11 @@ ModelTemplate::ModelTemplate(std::string_view spec, const WavelengthGrid& grid)
       m.bounds = std::pair{lo, hi};
       i = close + 1;
     }
+    // A mark ends where its value would: at ',', '+', white space or the end. Anything else
+    // ("alpha=?x") is a typo in the mark, reported here rather than as a bad number later.
+    if (i < spec.size() && spec[i] != ',' && spec[i] != '+' && !std::isspace(static_cast<unsigned char>(spec[i])))
+      throw Error::invalid(field, fmt::format("unexpected '{}' after the '?' mark: write ?, ?START "
+                                              "or ?START[LO,HI]", spec[i]));
     literal_.push_back(literal);
     substituted += literal + sentinel_text(raw.size());
     literal.clear();

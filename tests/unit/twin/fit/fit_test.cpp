@@ -58,6 +58,14 @@ TEST(ModelTemplate, RejectsBadMarks) {
   EXPECT_THROW(ModelTemplate("conductor:alpha=?2", kGrid), Error);          // start outside
   EXPECT_THROW(ModelTemplate("conductor:beta=?", kGrid), Error);            // unknown key
   EXPECT_THROW(ModelTemplate("conductor:alpha=?0.1[0.2", kGrid), Error);    // unclosed bounds
+  // A typo in a mark names the mark and what follows it, never the internal placeholder.
+  try {
+    ModelTemplate("conductor:alpha=?x,eta=0.2", kGrid);
+    FAIL() << "alpha=?x accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "model (mark 1 at offset 16)");
+    EXPECT_NE(std::string(e.what()).find("unexpected 'x' after the '?' mark"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Measured, CsvColumnsByName) {
