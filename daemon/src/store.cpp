@@ -382,6 +382,16 @@ int Store::schema_version() const {
   return s.step() ? static_cast<int>(s.i64(0)) : 0;
 }
 
+void Store::create_at_version(const std::filesystem::path& file, int version) {
+  if (version < 0 || version > kSchemaVersion)
+    throw Error::out_of_range("version", version, 0, kSchemaVersion);
+  Connection c(file, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+  for (int v = 0; v < version; ++v) {
+    c.exec(kMigrations[v]);
+    c.exec(fmt::format("PRAGMA user_version = {}", v + 1).c_str());
+  }
+}
+
 void Store::migrate() {
   std::lock_guard lock(write_mu_);
   int version = 0;
@@ -799,6 +809,16 @@ Alert Store::ack_alert(std::int64_t id, const std::string& actor) {
   return *alert(id);
 }
 
+Alert Store::set_alert_message(std::int64_t id, const std::string& message) {
+  {
+    std::lock_guard lock(write_mu_);
+    Stmt s(*writer_, "UPDATE alerts SET message = ? WHERE id = ?");
+    s.bind(1, message).bind(2, id).run();
+    if (sqlite3_changes(writer_->db) == 0) throw Error::not_found("alert", fmt::format("alert {}", id));
+  }
+  return *alert(id);
+}
+
 // ---- audit -----------------------------------------------------------------------------
 
 void Store::audit(const std::string& actor, const std::string& action, const std::string& target,
@@ -893,7 +913,10 @@ StoredFit Store::insert_fit(std::int64_t scan_id, const std::string& kind, const
       .bind(6, result.dump())
       .run();
   f.id = sqlite3_last_insert_rowid(writer_->db);
-  audit_in(*writer_, actor, kind == "calibrate" ? "instrument.calibrate" : "scan.fit",
+  const char* action = kind == "calibrate"   ? "instrument.calibrate"
+                       : kind == "diagnosis" ? "divergence.diagnose"
+                                             : "scan.fit";
+  audit_in(*writer_, actor, action,
            fmt::format("scan:{}", scan_id), json{{"fit", f.id}, {"model", model}});
   tx.commit();
   return f;

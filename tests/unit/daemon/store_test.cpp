@@ -71,6 +71,37 @@ TEST_F(StoreTest, MigratesToTheCurrentSchemaAndRefusesNewerFiles) {
   }
 }
 
+TEST_F(StoreTest, MigratesAVersion2StoreKeepingItsRowsAndAddingFitsAndProfiles) {
+  // A store as goniod 0.1 (schema 2) left it: one sample and one alert written by hand.
+  Store::create_at_version(file_, 2);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(file_.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db,
+                         "INSERT INTO samples(name, notes, bsdf, tolerance, created_at) VALUES "
+                         "('white', '', 'lambert:albedo=0.9', 0.02, '2026-01-01T00:00:00Z');"
+                         "INSERT INTO alerts(kind, severity, dedup_key, message, first_at, last_at) "
+                         "VALUES ('device_fault', 2, 'k', 'old', '2026-01-01T00:00:00Z', "
+                         "'2026-01-01T00:00:00Z');",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+
+  Store s(file_);
+  EXPECT_EQ(s.schema_version(), 3);
+  const auto white = s.sample_by_name("white");
+  ASSERT_TRUE(white.has_value());
+  EXPECT_EQ(white->spec.bsdf, "lambert:albedo=0.9");
+  ASSERT_TRUE(s.alert(1).has_value());
+  EXPECT_EQ(s.alert(1)->message, "old");
+  // The new tables work: a first profile is version 1.
+  EXPECT_FALSE(s.latest_profile().has_value());
+  const auto p = s.insert_profile("gcms4", nlohmann::json{{"name", "gcms4"}}, std::nullopt, std::nullopt, "test");
+  EXPECT_EQ(p.version, 1);
+  EXPECT_EQ(s.latest_profile()->version, 1);
+  EXPECT_EQ(s.insert_profile("gcms4", nlohmann::json{{"name", "gcms4"}}, std::nullopt, std::nullopt, "test").version, 2);
+  EXPECT_THROW(Store::create_at_version(dir_ / "x.db", Store::kSchemaVersion + 1), Error);
+}
+
 TEST_F(StoreTest, UsesWalMode) {
   Store s(file_);
   sqlite3* db = nullptr;

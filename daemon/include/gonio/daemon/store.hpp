@@ -94,6 +94,10 @@ class Store {
   Store(const Store&) = delete;
   Store& operator=(const Store&) = delete;
 
+  // Writes a new, empty store at an older schema `version` (0..kSchemaVersion), as an older
+  // goniod would have left it: what upgrade tests start from.
+  static void create_at_version(const std::filesystem::path& file, int version);
+
   int schema_version() const;
   const std::filesystem::path& path() const noexcept { return path_; }
 
@@ -148,6 +152,8 @@ class Store {
   std::vector<Alert> alerts(const AlertFilter& filter) const;
   // Throws Error(not_found); acknowledging twice is allowed and keeps the first ack.
   Alert ack_alert(std::int64_t id, const std::string& actor);
+  // Replaces an alert's message (a diagnosis appended later); count and times unchanged.
+  Alert set_alert_message(std::int64_t id, const std::string& message);
 
   // ---- fits and profiles
   StoredFit insert_fit(std::int64_t scan_id, const std::string& kind, const std::string& model,
