@@ -24,6 +24,7 @@
 #include "gonio/daemon/alerts.hpp"
 #include "gonio/daemon/auth.hpp"
 #include "gonio/daemon/config.hpp"
+#include "gonio/daemon/diagnosis.hpp"
 #include "gonio/daemon/hub.hpp"
 #include "gonio/daemon/instrument.hpp"
 #include "gonio/daemon/methods.hpp"
@@ -89,6 +90,31 @@ Config load_config(const DaemonOptions& o) {
   return c;
 }
 
+// The latest calibrated profile replaces the configured one when it was made from it (same
+// profile name); a calibration of another profile is kept in the store but not applied.
+void use_calibrated_profile(const Store& store, TwinService& twin) {
+  const auto stored = store.latest_profile();
+  if (!stored) return;
+  const auto configured = twin.profile();
+  if (stored->name != configured.name) {
+    spdlog::warn("the latest calibration (version {}) is of profile '{}', not the configured '{}': "
+                 "predicting with the configured profile", stored->version, stored->name,
+                 configured.name);
+    return;
+  }
+  try {
+    auto profile = stored->profile.get<twin::InstrumentProfile>();
+    profile.validate();
+    twin.set_profile(std::move(profile), stored->version, stored->created_at);
+  } catch (const std::exception& e) {
+    spdlog::error("cannot use calibrated profile version {}: {}; predicting with the configured "
+                  "profile", stored->version, e.what());
+    return;
+  }
+  spdlog::info("instrument profile {} version {} (calibrated {} by {})", stored->name,
+               stored->version, stored->created_at, stored->created_by);
+}
+
 }  // namespace
 
 int run_daemon(const DaemonOptions& o) {
@@ -124,6 +150,7 @@ int run_daemon(const DaemonOptions& o) {
       spdlog::info("wrote a new admin token to {} (mode 0600)", (state / "admin.token").string());
 
     TwinService twin(config, twin::InstrumentProfile::load(config.profile));
+    use_calibrated_profile(*store, twin);
     Hub hub;
     AlertService alerts(*store, hub, parse_enum<Severity>(config.webhook_min_severity, "webhook.min_severity"));
     Instrument instrument(config, *store, twin, alerts, hub);
@@ -175,6 +202,12 @@ int run_daemon(const DaemonOptions& o) {
     }
 
     // ---- instrument (a bad driver table is a usage error)
+    std::optional<Diagnoser> diagnoser;
+    if (config.diagnose) {
+      diagnoser.emplace(*store, twin, alerts);
+      instrument.set_sustained_listener(
+          [&diagnoser](std::int64_t scan, std::int64_t alert) { diagnoser->request(scan, alert); });
+    }
     instrument.set_status_listener([](const std::string& s) {
       sd_notifyf(0, "STATUS=%s", s.c_str());
     });

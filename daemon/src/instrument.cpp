@@ -189,6 +189,7 @@ json Instrument::status() const {
       {"limits", {{"incidence", {config_.limits.incidence_min, config_.limits.incidence_max}},
                   {"receive", {config_.limits.receive_min, config_.limits.receive_max}},
                   {"min_separation", guard_.min_separation_deg()}}},
+      {"profile", twin_.profile_info()},
   };
 }
 

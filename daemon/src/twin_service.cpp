@@ -45,11 +45,21 @@ TwinService::Snapshot TwinService::snapshot() const {
   return Snapshot{profile_, profile_version_, version_};
 }
 
-void TwinService::set_profile(twin::InstrumentProfile profile, std::int64_t version) {
+void TwinService::set_profile(twin::InstrumentProfile profile, std::int64_t version,
+                              std::string calibrated_at) {
   std::lock_guard lock(profile_mu_);
   version_ = make_version(options_, profile.name, version);
   profile_ = std::move(profile);
   profile_version_ = version;
+  calibrated_at_ = std::move(calibrated_at);
+}
+
+nlohmann::json TwinService::profile_info() const {
+  std::lock_guard lock(profile_mu_);
+  return nlohmann::json{{"name", profile_.name},
+                        {"version", profile_version_},
+                        {"calibrated_at", calibrated_at_.empty() ? nlohmann::json(nullptr)
+                                                                 : nlohmann::json(calibrated_at_)}};
 }
 
 TwinService::TwinService(const Config& config, twin::InstrumentProfile profile)

@@ -37,6 +37,7 @@ inline constexpr std::array kMethodTable{
     MethodSpec{"instrument.move", Role::technician, true},
     MethodSpec{"instrument.stop", Role::technician, false},
     MethodSpec{"instrument.reset", Role::technician, true},
+    MethodSpec{"instrument.calibrate", Role::admin, true},
     // samples
     MethodSpec{"sample.create", Role::technician, true},
     MethodSpec{"sample.get", Role::viewer, false},

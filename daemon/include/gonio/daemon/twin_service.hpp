@@ -38,8 +38,11 @@ class TwinService {
   // Its version in the store (0: the configured profile, not calibrated).
   std::int64_t profile_version() const;
   // Replaces the profile for twins made from now on (scans started later, twin.predict);
-  // twins already made keep theirs.
-  void set_profile(twin::InstrumentProfile profile, std::int64_t version);
+  // twins already made keep theirs. `calibrated_at`: when the calibration that made it ran.
+  void set_profile(twin::InstrumentProfile profile, std::int64_t version,
+                   std::string calibrated_at = {});
+  // {"name", "version" (0: as configured), "calibrated_at" (UTC, null when not calibrated)}
+  nlohmann::json profile_info() const;
   const twin::EstimatorOptions& options() const noexcept { return options_; }
   unsigned threads() const noexcept { return static_cast<unsigned>(workers_.size()); }
   // "gonio-twin <version> rqmc rel_se=0.002 R=16 seed=1 profile=gcms4"; a calibrated
@@ -101,6 +104,7 @@ class TwinService {
   mutable std::mutex profile_mu_;
   twin::InstrumentProfile profile_;
   std::int64_t profile_version_ = 0;
+  std::string calibrated_at_;
   std::string version_;
   twin::EstimatorOptions options_;
   mutable std::mutex mu_;
