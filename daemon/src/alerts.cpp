@@ -53,4 +53,13 @@ Alert AlertService::ack(std::int64_t id, const std::string& actor) {
   return a;
 }
 
+Alert AlertService::annotate(std::int64_t id, const std::string& note) {
+  const auto old = store_.alert(id);
+  if (!old) throw Error::not_found("alert", fmt::format("alert {}", id));
+  const Alert a = store_.set_alert_message(id, fmt::format("{}; {}", old->message, note));
+  spdlog::info("alert {}: {}", id, note);
+  hub_.publish(Topic::alerts, "alert", nlohmann::json(a), a.scan_id);
+  return a;
+}
+
 }  // namespace gonio::daemon

@@ -289,6 +289,7 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
     c.sustained_n = static_cast<int>(r.optional_in<long long>("sustained_n", c.sustained_n, 1, 1000));
     c.reference_drift = r.optional_in<double>("reference_drift", c.reference_drift, 0.001, 1);
     c.pause_on_sustained = r.optional<bool>("pause_on_sustained", c.pause_on_sustained);
+    c.diagnose = r.optional<bool>("diagnose", c.diagnose);
     r.finish();
   }
 

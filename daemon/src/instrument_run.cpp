@@ -366,13 +366,14 @@ void Instrument::step() {
   }
   if (p.predicted && r.window.push(p.diverged) && !r.sustained_raised) {
     r.sustained_raised = true;
-    alerts_.raise(AlertDraft{std::string(alert_kind::sustained), Severity::critical,
+    const auto alert = alerts_.raise(AlertDraft{std::string(alert_kind::sustained), Severity::critical,
                              fmt::format("sustained:scan:{}", r.scan.id), r.scan.id, r.sample_id,
                              p.index,
                              fmt::format("scan {}: {} of the last {} points diverge from the twin "
                                          "(up to point {})",
                                          r.scan.id, r.window.diverged_in_window(),
                                          config_.sustained_n, idx)});
+    if (sustained_listener_) sustained_listener_(r.scan.id, alert.id);
     if (config_.pause_on_sustained) {
       std::lock_guard lock(mu_);
       control_ = Control::pause;

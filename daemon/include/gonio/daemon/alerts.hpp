@@ -31,6 +31,8 @@ class AlertService {
 
   Alert raise(const AlertDraft& draft);
   Alert ack(std::int64_t id, const std::string& actor);
+  // Appends `note` to alert `id`'s message and pushes the alert to subscribers again.
+  Alert annotate(std::int64_t id, const std::string& note);
 
  private:
   Store& store_;

@@ -109,6 +109,7 @@ struct Config {
   int sustained_n = 5;
   double reference_drift = 0.05;     // relative drift of the reference white reading
   bool pause_on_sustained = false;
+  bool diagnose = true;              // try arm offsets and gain on a sustained divergence
 
   // [webhook]
   std::string webhook_url;  // http://HOST:PORT/PATH; empty: no webhook

@@ -94,6 +94,11 @@ class Instrument {
   void set_status_listener(std::function<void(const std::string&)> f) {
     status_listener_ = std::move(f);
   }
+  // Called from the runner thread with (scan, alert) when a sustained-divergence alert is
+  // raised (the diagnosis); must return at once. Set before start().
+  void set_sustained_listener(std::function<void(std::int64_t, std::int64_t)> f) {
+    sustained_listener_ = std::move(f);
+  }
 
  private:
   struct Run;
@@ -143,6 +148,7 @@ class Instrument {
   mutable std::mutex mu_;
   std::condition_variable cv_;
   std::function<void(const std::string&)> status_listener_;
+  std::function<void(std::int64_t, std::int64_t)> sustained_listener_;
   std::thread thread_;
   bool stopping_ = false;
   bool started_ = false;
