@@ -204,14 +204,16 @@ void add_render(CLI::App& app) {
           const auto& s = r.maps[k].stats;
           j["delta_e"].push_back({{"reference", names[0]}, {"other", names[k + 1]},
                                   {"pixels", s.pixels}, {"mean", s.mean}, {"p95", s.p95},
-                                  {"max", s.max}});
+                                  {"max", s.max}, {"noise_mean", s.noise_mean}});
         }
         std::cout << j.dump(2) << '\n';
       } else {
         for (std::size_t k = 0; k < r.maps.size(); ++k) {
           const auto& s = r.maps[k].stats;
-          std::cout << fmt::format("ΔE00 {} vs {}: mean {:.3f}, p95 {:.3f}, max {:.3f} ({} pixels)\n",
-                                   names[k + 1], names[0], s.mean, s.p95, s.max, s.pixels);
+          std::cout << fmt::format(
+              "ΔE00 {} vs {}: mean {:.3f} (noise alone ≈ {:.3f}), p95 {:.3f}, max {:.3f} ({} "
+              "pixels)\n",
+              names[k + 1], names[0], s.mean, s.noise_mean, s.p95, s.max, s.pixels);
         }
         std::cout << fmt::format("wrote {} ({:.1f} s, measurement {:.1f} s)\n", *output, total,
                                  measure_s);

@@ -74,7 +74,7 @@ SpecularGrid specular_measurement_grid(double theta_step_deg, double radial_step
   while (r < 180) {
     g.radial.push_back(rounded(r));
     r += step;
-    step *= 1.2;
+    step *= 1.1;
   }
   g.radial.push_back(180);
   for (double a = 0; a < 180 - 1e-9; a += phi_step_deg) g.azimuth.push_back(rounded(a));

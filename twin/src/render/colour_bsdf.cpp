@@ -57,8 +57,17 @@ ColourBsdf::ColourBsdf(const Bsdf& bsdf, bool colour, unsigned threads)
     const auto& parts = tab->parts();
     if (parts.brdf) {
       isotropic_ = parts.brdf->isotropic();
+      // One table with three channels (X, Y, Z interleaved; their "wavelengths" 1, 2, 3 nm
+      // are labels only), so that one interpolation locates the cell for all three.
       const BsdfTable on_grid = parts.brdf->resampled(bsdf.wavelengths().values());
-      for (int k = 0; k < 3; ++k) projected_.push_back(on_grid.weighted(w_[static_cast<std::size_t>(k)]));
+      std::array<BsdfTable, 3> by_channel;
+      for (std::size_t k = 0; k < 3; ++k) by_channel[k] = on_grid.weighted(w_[k]);
+      const std::size_t nodes = by_channel[0].values().size();
+      std::vector<double> xyz(3 * nodes);
+      for (std::size_t i = 0; i < nodes; ++i)
+        for (std::size_t k = 0; k < 3; ++k) xyz[3 * i + k] = std::max(0.0, by_channel[k].values()[i]);
+      projected_.emplace_back(on_grid.param(), on_grid.axes(), std::vector<double>{1, 2, 3},
+                              std::move(xyz), on_grid.reduction());
     } else {
       projected_.clear();  // specular parts only: nothing to interpolate
     }
@@ -73,9 +82,8 @@ Colour ColourBsdf::eval(const Vec3& wi, const Vec3& wo) const {
   Colour out{0, 0, 0};
   if (wi.z <= 0 || wo.z <= 0) return out;
   if (!projected_.empty()) {
-    const auto p = projected_[1].coords(wi, wo);
-    for (int k = colour_ ? 0 : 1; k < (colour_ ? 3 : 2); ++k)
-      projected_[static_cast<std::size_t>(k)].interpolate(p, {&out[static_cast<std::size_t>(k)], 1});
+    projected_.front().eval(wi, wo, out);
+    if (!colour_) out[0] = out[2] = 0;
     return out;
   }
   if (dynamic_cast<const TabulatedBsdf*>(&bsdf_) != nullptr) return out;  // no BRDF table

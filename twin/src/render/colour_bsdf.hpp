@@ -60,7 +60,7 @@ class ColourBsdf {
   const Bsdf& bsdf_;
   bool colour_;
   std::array<std::vector<double>, 3> w_;
-  std::vector<BsdfTable> projected_;  // per colour channel, TabulatedBsdf BRDFs only
+  std::vector<BsdfTable> projected_;  // X, Y, Z as three channels; TabulatedBsdf BRDFs only
   bool isotropic_ = true;
   struct Node {
     Colour a, mx, mz;

@@ -188,8 +188,8 @@ Comparison render_comparison(const std::vector<const Bsdf*>& bsdfs,
   for (std::size_t k = 1; k < bsdfs.size(); ++k) {
     out.maps.push_back(delta_e_map(out.spheres[0], out.spheres[k], o));
     const auto& st = out.maps.back().stats;
-    p.map_captions.push_back(fmt::format("ΔE00 {} vs {}\nmean {:.2f} · p95 {:.2f} · max {:.1f}",
-                                         captions[k], captions[0], st.mean, st.p95, st.max));
+    p.map_captions.push_back(fmt::format("ΔE00 {} vs {}\nmean {:.2f} (noise {:.2f}) · p95 {:.2f} · max {:.1f}",
+                                         captions[k], captions[0], st.mean, st.noise_mean, st.p95, st.max));
   }
   for (const auto& m : out.maps) p.maps.push_back(&m);
   out.image = compose_panels(p, o);

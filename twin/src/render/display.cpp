@@ -64,19 +64,27 @@ DeltaEMap delta_e_map(const SphereImage& a, const SphereImage& b, const RenderOp
     return Rgb{k * c.r + (1 - k) * bg.r, k * c.g + (1 - k) * bg.g, k * c.b + (1 - k) * bg.b};
   };
   std::vector<double> interior;
+  double noise = 0;
   for (std::size_t i = 0; i < a.xyz.size(); ++i) {
     const float cov = std::max(a.coverage[i], b.coverage[i]);
     if (cov <= 0) continue;
     m.coverage[i] = cov;
     const double de = delta_e2000(display_lab(composite(a, i)), display_lab(composite(b, i)));
     m.delta_e[i] = static_cast<float>(de);
-    if (a.coverage[i] >= 1 && b.coverage[i] >= 1) interior.push_back(de);
+    if (a.coverage[i] >= 1 && b.coverage[i] >= 1) {
+      interior.push_back(de);
+      const double rel = std::hypot(a.rel_se[i], b.rel_se[i]);
+      const Xyz& x = a.xyz[i];
+      const Xyz up{x.x * (1 + rel), x.y * (1 + rel), x.z * (1 + rel)};
+      noise += delta_e2000(display_lab(display_rgb(x, o)), display_lab(display_rgb(up, o)));
+    }
   }
   m.stats.pixels = interior.size();
   if (!interior.empty()) {
     double s = 0;
     for (double v : interior) s += v;
     m.stats.mean = s / static_cast<double>(interior.size());
+    m.stats.noise_mean = std::sqrt(2 / kPi) * noise / static_cast<double>(interior.size());
     m.stats.p95 = quantile(interior, 0.95);
     m.stats.max = *std::max_element(interior.begin(), interior.end());
   }

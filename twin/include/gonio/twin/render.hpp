@@ -121,6 +121,10 @@ Lab display_lab(const Rgb& linear_rgb);
 struct DeltaEStats {
   std::size_t pixels = 0;  // pixels fully on both spheres
   double mean = 0, p95 = 0, max = 0;
+  // The mean ΔE00 the two renders' own noise would give between identical BSDFs: per pixel
+  // the ΔE of a luminance change of one combined standard error, times √(2/π) (the mean of
+  // |N(0, 1)|). A mean close to it says the spheres differ by noise alone.
+  double noise_mean = 0;
 };
 
 // Per-pixel CIEDE2000 between the displayed colours of two spheres (same size), both

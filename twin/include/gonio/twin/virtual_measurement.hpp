@@ -30,7 +30,7 @@ std::shared_ptr<TabulatedBsdf> measure_tabulated(const Twin& twin, const Angular
                                                  unsigned threads = 0);
 
 // A specular grid that does not depend on the BSDF: θi every `theta_step_deg` from 0 to 85°,
-// radial angles from 0 in steps that start at `radial_step_deg` and grow by 20 % per node up
+// radial angles from 0 in steps that start at `radial_step_deg` and grow by 10 % per node up
 // to 180° (fine where any measured lobe peaks — the instrument's apertures widen the
 // narrowest lobe to ≈ 2° — coarse in the tails), azimuths 0…180° every `phi_step_deg`.
 // Ranges: θ step 0.5–45°, radial step 0.05–10°, φ step 1–90° (Error naming the field).
