@@ -51,7 +51,7 @@ std::array<std::vector<double>, 3> colour_weights(const WavelengthGrid& grid) {
 
 }  // namespace
 
-ColourBsdf::ColourBsdf(const Bsdf& bsdf, bool colour, unsigned threads)
+ColourBsdf::ColourBsdf(const Bsdf& bsdf, bool colour, bool moments, unsigned threads)
     : bsdf_(bsdf), colour_(colour), w_(colour_weights(bsdf.wavelengths())) {
   if (const auto* tab = dynamic_cast<const TabulatedBsdf*>(&bsdf)) {
     const auto& parts = tab->parts();
@@ -75,7 +75,7 @@ ColourBsdf::ColourBsdf(const Bsdf& bsdf, bool colour, unsigned threads)
     if (parts.specular_reflectance && !parts.specular_reflectance->phi_i().empty())
       isotropic_ = false;
   }
-  build_albedo(threads);
+  if (moments) build_albedo(threads);
 }
 
 Colour ColourBsdf::eval(const Vec3& wi, const Vec3& wo) const {

@@ -29,9 +29,9 @@ using Colour = std::array<double, 3>;  // X, Y, Z (Y alone in channel 1 for grey
 
 class ColourBsdf {
  public:
-  // `colour` false: channel 1 (Y) only, the others left 0. The albedo table is built on
-  // `threads` threads (0: hardware concurrency).
-  ColourBsdf(const Bsdf& bsdf, bool colour, unsigned threads);
+  // `colour` false: channel 1 (Y) only, the others left 0. With `moments` the albedo and
+  // moment tables are built, on `threads` threads (0: hardware concurrency).
+  ColourBsdf(const Bsdf& bsdf, bool colour, bool moments, unsigned threads);
 
   // Projected f(wi, wo) for reflection (wi.z > 0, wo.z > 0; 0 otherwise).
   Colour eval(const Vec3& wi, const Vec3& wo) const;
@@ -44,6 +44,7 @@ class ColourBsdf {
   void delta(const Vec3& wo, std::vector<std::pair<Vec3, Colour>>& out) const;
 
   bool isotropic() const noexcept { return isotropic_; }
+  bool has_moments() const noexcept { return !nodes_.empty(); }
   // A(wo) and M(wo) (local frame) of the sampler, projected.
   struct Moments {
     Colour albedo;

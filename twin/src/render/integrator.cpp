@@ -88,8 +88,9 @@ void RenderOptions::validate() const {
 SphereImage render_sphere(const Bsdf& bsdf, const RenderOptions& o) {
   o.validate();
   const auto t0 = std::chrono::steady_clock::now();
-  const render::ColourBsdf cb(bsdf, o.colour, o.threads);
   const render::Scene scene(o.lighting);
+  // The control variate's tables are needed only under an environment.
+  const render::ColourBsdf cb(bsdf, o.colour, scene.has_environment(), o.threads);
   const int size = o.size;
   const std::size_t npx = static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
   SphereImage out;
@@ -102,7 +103,7 @@ SphereImage render_sphere(const Bsdf& bsdf, const RenderOptions& o) {
   const double c = 0.5 * size, radius = out.radius;
   const Vec3 view{0, 0, 1};
   const bool stochastic = scene.has_environment() || scene.has_emitters();
-  const bool use_cv = cb.isotropic() && scene.has_environment();
+  const bool use_cv = cb.isotropic() && cb.has_moments();
   const double floor = kLitFloor / o.exposure;
 
   std::atomic<int> next_row{0};

@@ -199,6 +199,7 @@ TEST(Render, UniformEnvironmentIsExactThroughTheControlVariate) {
 }
 
 TEST(Render, AreaLightMatchesAPointLightOnADiffuser) {
+  SKIP_UNLESS_OPTIMISED();
   // A small disc of irradiance 1 lights a Lambertian sphere like a point light (cos θ
   // averaged over the disc differs by < 1e-3 away from the terminator); the estimate goes
   // through emitter sampling and BSDF sampling weighted by the power heuristic.
@@ -221,6 +222,7 @@ TEST(Render, AreaLightMatchesAPointLightOnADiffuser) {
 }
 
 TEST(Render, GlossySpheresReachTheNoiseTargetOrSaySo) {
+  SKIP_UNLESS_OPTIMISED();
   const TestPhong phong(kGrid, 0.7, 150);
   for (auto env : {EnvironmentKind::sky, EnvironmentKind::studio}) {
     auto o = small(40);
@@ -282,6 +284,7 @@ TEST(Render, ColourFollowsTheSpectrum) {
 }
 
 TEST(Render, IsDeterministicWhateverTheThreadCount) {
+  SKIP_UNLESS_OPTIMISED();
   const TestPhong phong(kGrid, 0.4, 60);
   auto o = small(48);
   o.lighting.environment = EnvironmentKind::sky;
