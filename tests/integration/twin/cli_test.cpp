@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gonio/proto/version.hpp"
+#include "gonio/twin/plot.hpp"
 #include "gonio/test/temp_dir.hpp"
 
 namespace {
@@ -195,9 +196,54 @@ TEST(GonioTwinCli, RenderWritesAPng) {
   TempDir dir;
   const auto png = (dir.path() / "s.png").string();
   const auto r = gonio_twin("render --bsdf lambert:albedo=0.7 --wavelengths 450,550,650 --size 48 "
-                            "--spp 2 --theta-step 15 --phi-step 45 --rel-se 0.01 --output " + png);
+                            "--theta-step 15 --radial-step 2 --phi-step 45 --rel-se 0.01 --pixel-rel-se 0.03 "
+                            "--output " + png);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_GT(fs::file_size(png), 500u);
+  EXPECT_NE(r.out.find("ΔE00 measured vs true"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("rel. s.e."), std::string::npos) << r.err;  // the noise report
+}
+
+TEST(GonioTwinCli, RenderWithACorrectedTableDrawsThreeSpheresAndTwoMaps) {
+  TempDir dir;
+  const auto table = (dir.path() / "c.ssdd").string();
+  auto r = gonio_twin("convert --bsdf lambert:albedo=0.6 --wavelengths 450,550,650 --theta-step 30 "
+                      "--output " + table);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto png = (dir.path() / "s.png").string();
+  r = gonio_twin("render --bsdf lambert:albedo=0.7 --wavelengths 450,550,650 --size 40 "
+                 "--theta-step 15 --radial-step 2 --phi-step 45 --rel-se 0.01 --pixel-rel-se 0.03 "
+                 "--environment uniform:0.3 --corrected " + table + " --json --output " + png);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j.at("spheres").size(), 3u);
+  ASSERT_EQ(j.at("delta_e").size(), 2u);
+  EXPECT_EQ(j.at("delta_e")[1].at("other").get<std::string>(), "corrected");
+  for (const auto& d : j.at("delta_e")) {
+    EXPECT_LE(d.at("mean").get<double>(), d.at("p95").get<double>() + 1e-12);
+    EXPECT_LE(d.at("p95").get<double>(), d.at("max").get<double>());
+  }
+  // Albedo 0.6 against 0.7: a visible difference.
+  EXPECT_GT(j.at("delta_e")[1].at("mean").get<double>(), 2.0);
+  EXPECT_GT(j.at("spheres")[0].at("noise").at("lit_pixels").get<double>(), 500);
+  const auto img = gonio::twin::read_png(png);
+  EXPECT_GE(img.width, 5 * 40);
+}
+
+TEST(GonioTwinCli, RenderRefusesBadOptionsNamingTheFlag) {
+  auto r = gonio_twin("render --bsdf lambert:albedo=0.7 --size 4");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--size"), std::string::npos) << r.err;
+  r = gonio_twin("render --bsdf lambert:albedo=0.7 --environment fog");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--environment"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("sky"), std::string::npos) << r.err;
+  r = gonio_twin("render --bsdf lambert:albedo=0.7 --environment sky:500");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("[0, 100]"), std::string::npos) << r.err;
+  r = gonio_twin("render --bsdf lambert:albedo=0.7 --light-size 90");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--light-size"), std::string::npos) << r.err;
 }
 
 }  // namespace

@@ -10,8 +10,6 @@
 // peak is spread over a whole cell (3.6 instead of 0.84 at θi = 85° for α = 0.1).
 #include <chrono>
 #include <iostream>
-#include <map>
-#include <tuple>
 
 #include <fmt/format.h>
 
@@ -60,37 +58,6 @@ double luminance(const std::vector<double>& albedo, const std::vector<double>& w
   double s = 0;
   for (std::size_t c = 0; c < albedo.size(); ++c) s += weights[c] * albedo[c];
   return s;
-}
-
-// The twin's prediction at every node of the grid, as f = β/π: the instrument's view of the
-// model (apertures averaging the lobe, the lit spot at grazing angles). Nodes that share a
-// geometry (radial 0 at every azimuth, nodes pulled onto the horizon) are measured once;
-// receivers are kept 1° above the sample plane, the instrument's limit.
-BsdfTable measure_on_grid(const Twin& twin, const SpecularGrid& grid, const ModelOptions& model) {
-  const auto dirs = specular_grid_directions(grid);
-  std::map<std::tuple<long, long, long>, std::size_t> index;
-  std::vector<Geometry> geoms;
-  std::vector<std::size_t> which(dirs.size());
-  for (std::size_t k = 0; k < dirs.size(); ++k) {
-    const auto& [wi, wo] = dirs[k];
-    const double ti = std::acos(std::clamp(wi.z, -1.0, 1.0)) * kRadToDeg;
-    const double to = std::min(89.0, std::acos(std::clamp(wo.z, -1.0, 1.0)) * kRadToDeg);
-    const double po = (wo.x == 0 && wo.y == 0) ? 0.0 : std::atan2(wo.y, wo.x) * kRadToDeg;
-    const auto key = std::make_tuple(std::lround(ti * 1e4), std::lround(to * 1e4),
-                                     std::lround(po * 1e4));
-    const auto [it, fresh] = index.emplace(key, geoms.size());
-    if (fresh) geoms.push_back(Geometry{ti, 0, to, po});
-    which[k] = it->second;
-  }
-  std::cerr << fmt::format("measuring {} geometries ...\n", geoms.size());
-  const auto pred = twin.predict_many(geoms, model.estimator_options(), model.threads);
-  const std::size_t C = twin.wavelengths().size();
-  std::vector<double> values(dirs.size() * C);
-  for (std::size_t k = 0; k < dirs.size(); ++k)
-    for (std::size_t c = 0; c < C; ++c)
-      values[k * C + c] = std::max(0.0, pred[which[k]].beta[c]) * kInvPi;
-  return BsdfTable(TableParam::specular, {grid.theta_i, {}, grid.radial, grid.azimuth},
-                   twin.wavelengths().values(), std::move(values), {true, false});
 }
 
 }  // namespace
@@ -158,7 +125,9 @@ void add_convert(CLI::App& app) {
             "lobe-following grid: {} θi × {} radial × {} azimuth nodes (tolerance {:g})\n",
             grid.theta_i.size(), grid.radial.size(), grid.azimuth.size(), rep.tolerance);
         if (*virtual_measurement) {
-          parts.brdf = measure_on_grid(twin, grid, *model);
+          std::cerr << fmt::format("measuring {} geometries ...\n",
+                                   specular_geometries(grid).geometries.size());
+          parts.brdf = measure_specular(twin, grid, model->estimator_options(), model->threads);
           parts.name = "virtually measured " + bsdf.spec();
           ssdd.device = twin.profile().name;
         } else {

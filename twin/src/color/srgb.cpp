@@ -17,6 +17,14 @@ Rgb xyz_to_linear_srgb(const Xyz& c) {
           0.0557 * c.x - 0.2040 * c.y + 1.0570 * c.z};
 }
 
+// The standard's decoding matrix (IEC 61966-2-1:1999, §5.2; it is the inverse of the one
+// above to the four decimals the standard gives).
+Xyz linear_srgb_to_xyz(const Rgb& c) {
+  return {0.4124 * c.r + 0.3576 * c.g + 0.1805 * c.b,
+          0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b,
+          0.0193 * c.r + 0.1192 * c.g + 0.9505 * c.b};
+}
+
 double srgb_encode(double linear) {
   const double c = std::clamp(linear, 0.0, 1.0);
   return c <= 0.0031308 ? 12.92 * c : std::min(1.0, 1.055 * std::pow(c, 1 / 2.4) - 0.055);

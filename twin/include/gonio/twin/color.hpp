@@ -158,6 +158,8 @@ std::optional<std::array<std::vector<double>, 3>> xyz_weights(const std::vector<
 // sRGB (IEC 61966-2-1:1999). XYZ on the 0..1 scale (Y = 1 for the display white, D65,
 // CIE 1931 2° observer) to linear RGB; values outside [0, 1] are kept.
 Rgb xyz_to_linear_srgb(const Xyz& xyz);
+// The inverse: linear sRGB to XYZ (Y = 1 for the display white).
+Xyz linear_srgb_to_xyz(const Rgb& rgb);
 // The sRGB transfer function, one component; input clamped to [0, 1].
 double srgb_encode(double linear);
 double srgb_decode(double encoded);

@@ -1,0 +1,266 @@
+// render_sphere(): one sphere, every pixel estimated to the same relative standard error.
+//
+// Per pixel (its centre's surface point; twin/rendering.md has the derivation):
+//   exact terms      π f(ωl, ωo) cos θl for a point key light; weight·L(ωi) per delta lobe;
+//                    A·L̄ + g·(M − A·r): h(ω) = L̄ + g·(ω − r) is the dome to first order
+//                    about the mirror direction r (L̄ its value, g its gradient), A and M
+//                    the sampler's E[f cos/p_b] and E[f cos/p_b · ω]
+//   per sample       BSDF sample ωi ~ p_b:  f cos θi / p_b · (L_dome(ωi) − h(ωi))
+//                                          + w_b · f cos θi · L_emit(ωi) / p_b
+//                    emitter sample ωe ~ p_e: w_e · f cos θe · L_emit(ωe) / p_e
+//   with the power heuristic w_b = p_b² / (p_b² + p_e²), w_e = p_e² / (p_b² + p_e²).
+// h is a control variate: its expectation under the sampler is known exactly, so subtracting
+// it inside and adding it outside is unbiased, and it removes both the sampler's mismatch
+// and the dome's gradient across the lobe — what is left is the dome's curvature. Batches of min_samples run until the s.e. of Y reaches the target.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <mutex>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "core/sobol.hpp"
+#include "gonio/proto/error.hpp"
+#include "gonio/twin/render.hpp"
+#include "render/colour_bsdf.hpp"
+#include "render/scene.hpp"
+
+namespace gonio::twin {
+namespace {
+
+void check_range(const char* field, double v, double lo, double hi, std::string_view unit = {}) {
+  if (!(v >= lo && v <= hi))
+    throw Error::out_of_range(fmt::format("render.{}", field), v, lo, hi, unit);
+}
+
+// SplitMix64 (Steele, Lea & Flood, "Fast splittable pseudorandom number generators",
+// OOPSLA 2014): a tiny per-pixel generator.
+class SplitMix {
+ public:
+  explicit SplitMix(std::uint64_t seed) : s_(seed) {}
+  double uniform() {
+    std::uint64_t z = (s_ += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
+  }
+
+ private:
+  std::uint64_t s_;
+};
+
+using render::Colour;
+
+constexpr int kCoverageGrid = 8;       // sub-pixel grid for the silhouette's coverage
+constexpr int kSilhouetteBatches = 4;  // sample budget of partly covered pixels, in batches
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  const auto k = static_cast<std::size_t>(std::min<double>(static_cast<double>(v.size()) - 1,
+                                                           std::floor(q * static_cast<double>(v.size()))));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+}  // namespace
+
+void Lighting::validate() const {
+  check_range("light_theta", light_theta, 0, 180, "°");
+  check_range("light_phi", light_phi, -360, 360, "°");
+  check_range("light_size", light_size, 0, 45, "°");
+  check_range("environment_level", environment_level, 0, 100);
+}
+
+void RenderOptions::validate() const {
+  check_range("size", size, 16, 4096, " px");
+  lighting.validate();
+  check_range("rel_se", rel_se, 1e-4, 0.5);
+  check_range("min_samples", min_samples, 2, 1 << 16);
+  check_range("max_samples", max_samples, min_samples, 1 << 20);
+  check_range("exposure", exposure, 1e-6, 1e6);
+  check_range("delta_e_max", delta_e_max, 0.1, 100);
+  check_range("threads", threads, 0, 1024);
+}
+
+SphereImage render_sphere(const Bsdf& bsdf, const RenderOptions& o) {
+  o.validate();
+  const auto t0 = std::chrono::steady_clock::now();
+  const render::Scene scene(o.lighting);
+  // The control variate's tables are needed only under an environment.
+  const render::ColourBsdf cb(bsdf, o.colour, scene.has_environment(), o.threads);
+  const int size = o.size;
+  const std::size_t npx = static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
+  SphereImage out;
+  out.size = size;
+  out.radius = 0.46 * size;
+  out.xyz.assign(npx, Xyz{});
+  out.coverage.assign(npx, 0.0f);
+  out.rel_se.assign(npx, 0.0f);
+  out.samples.assign(npx, 0);
+  const double c = 0.5 * size, radius = out.radius;
+  const Vec3 view{0, 0, 1};
+  const bool stochastic = scene.has_environment() || scene.has_emitters();
+  const bool use_cv = cb.isotropic() && cb.has_moments();
+  const double floor = kLitFloor / o.exposure;
+
+  std::atomic<int> next_row{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  const auto worker = [&] {
+    try {
+      std::vector<std::pair<Vec3, Colour>> lobes;
+      for (int py = next_row++; py < size; py = next_row++) {
+        for (int px = 0; px < size; ++px) {
+          const std::size_t idx = out.index(px, py);
+          int inside = 0;
+          for (int sy = 0; sy < kCoverageGrid; ++sy)
+            for (int sx = 0; sx < kCoverageGrid; ++sx) {
+              const double x = (px + (sx + 0.5) / kCoverageGrid - c) / radius;
+              const double y = (c - (py + (sy + 0.5) / kCoverageGrid)) / radius;
+              inside += x * x + y * y <= 1;
+            }
+          if (inside == 0) continue;
+          // Pixels the silhouette crosses are blended with the background and see the lobe
+          // at grazing angles, where it converges slowest: they stop after kSilhouetteBatches.
+          const int budget = inside == kCoverageGrid * kCoverageGrid
+                                 ? o.max_samples
+                                 : std::min(o.max_samples, kSilhouetteBatches * o.min_samples);
+          out.coverage[idx] = static_cast<float>(inside) / (kCoverageGrid * kCoverageGrid);
+          // Shading point: the pixel centre, pulled onto the sphere on the silhouette.
+          double x = (px + 0.5 - c) / radius, y = (c - (py + 0.5)) / radius;
+          const double r2 = x * x + y * y;
+          if (r2 > 0.9999) {
+            const double s = std::sqrt(0.9999 / r2);
+            x *= s;
+            y *= s;
+          }
+          const Vec3 n{x, y, std::sqrt(std::max(0.0, 1 - x * x - y * y))};
+          const Frame frame = Frame::from_normal(n);
+          const Vec3 wo = frame.to_local(view);
+          Colour fixed{0, 0, 0};
+          const auto add = [](Colour& acc, const Colour& f, double w) {
+            for (std::size_t k = 0; k < 3; ++k) acc[k] += w * f[k];
+          };
+          if (scene.point_light()) {
+            const Vec3 wl = frame.to_local(scene.key());
+            if (wl.z > 0) add(fixed, cb.eval(wl, wo), kPi * wl.z);
+          }
+          if (cb.has_delta()) {
+            cb.delta(wo, lobes);
+            for (const auto& [wi, weight] : lobes) {
+              const Vec3 w = frame.to_world(wi);
+              add(fixed, weight, scene.environment(w) + scene.emitted(w));
+            }
+          }
+          double l_bar = 0;
+          Vec3 r{}, g{};
+          if (use_cv) {
+            r = reflect(view, n);
+            l_bar = scene.environment(r);
+            constexpr double h = 1e-3;
+            g = Vec3{scene.environment(r + Vec3{h, 0, 0}) - scene.environment(r - Vec3{h, 0, 0}),
+                     scene.environment(r + Vec3{0, h, 0}) - scene.environment(r - Vec3{0, h, 0}),
+                     scene.environment(r + Vec3{0, 0, h}) - scene.environment(r - Vec3{0, 0, h})} /
+                (2 * h);
+            const auto m = cb.moments(wo);
+            for (std::size_t k = 0; k < 3; ++k)
+              fixed[k] += m.albedo[k] * (l_bar - dot(g, r)) + dot(g, frame.to_world(m.moment[k]));
+          }
+          Colour sum{0, 0, 0};
+          double sum_y = 0, sum_y2 = 0;
+          int n_samples = 0;
+          double se = 0;
+          if (stochastic) {
+            SplitMix rng(detail::mix64(o.seed) ^ (static_cast<std::uint64_t>(py) << 32 |
+                                                  static_cast<std::uint64_t>(px)));
+            for (;;) {
+              for (int b = 0; b < o.min_samples; ++b) {
+                Colour v{0, 0, 0};
+                const double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+                const double u3 = rng.uniform(), u4 = rng.uniform(), u5 = rng.uniform();
+                if (const auto s = cb.sample(wo, u0, {u1, u2}); s && s->wi.z > 0 && s->pdf > 0) {
+                  const Vec3 w = frame.to_world(s->wi);
+                  double l = use_cv ? scene.environment(w) - l_bar - dot(g, w - r)
+                                    : scene.environment(w);
+                  if (const double e = scene.emitted(w); e > 0) {
+                    const double pe = scene.emitter_pdf(w);
+                    l += e * s->pdf * s->pdf / (s->pdf * s->pdf + pe * pe);
+                  }
+                  if (l != 0) add(v, cb.eval(s->wi, wo), s->wi.z * l / s->pdf);
+                }
+                if (scene.has_emitters()) {
+                  const auto es = scene.sample_emitter(u3, {u4, u5});
+                  const Vec3 wl = frame.to_local(es.w);
+                  if (wl.z > 0 && es.pdf > 0) {
+                    const double pb = cb.pdf(wo, wl);
+                    const double w = es.pdf * es.pdf / (es.pdf * es.pdf + pb * pb);
+                    add(v, cb.eval(wl, wo), wl.z * es.radiance * w / es.pdf);
+                  }
+                }
+                add(sum, v, 1);
+                sum_y += v[1];
+                sum_y2 += v[1] * v[1];
+              }
+              n_samples += o.min_samples;
+              const double nn = n_samples;
+              const double mean = sum_y / nn;
+              const double var = std::max(0.0, (sum_y2 / nn - mean * mean) * nn / (nn - 1));
+              se = std::sqrt(var / nn);
+              const double lum = fixed[1] + mean;
+              if (se <= o.rel_se * std::max(lum, floor) || n_samples >= budget) break;
+            }
+          }
+          Colour total = fixed;
+          if (n_samples > 0) add(total, sum, 1.0 / n_samples);
+          if (!o.colour) {
+            total[0] = 0.3127 / 0.3290 * total[1];
+            total[2] = (1 - 0.3127 - 0.3290) / 0.3290 * total[1];
+          }
+          out.xyz[idx] = {total[0], total[1], total[2]};
+          out.samples[idx] = static_cast<std::uint32_t>(n_samples);
+          out.rel_se[idx] = static_cast<float>(se / std::max(total[1], floor));
+        }
+      }
+    } catch (...) {
+      const std::lock_guard lock(failure_mutex);
+      if (!failure) failure = std::current_exception();
+      next_row = size;  // stop the others
+    }
+  };
+  unsigned nt = o.threads != 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
+  nt = std::min<unsigned>(nt, static_cast<unsigned>(size));
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < nt; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+
+  // Noise over the lit pixels fully on the sphere.
+  std::vector<double> rel;
+  double samples = 0;
+  std::size_t on = 0;
+  for (std::size_t i = 0; i < npx; ++i) {
+    if (out.coverage[i] <= 0) continue;
+    ++on;
+    samples += out.samples[i];
+    if (out.coverage[i] >= 1 && out.xyz[i].y * o.exposure >= kLitFloor) rel.push_back(out.rel_se[i]);
+  }
+  auto& nr = out.noise;
+  nr.lit_pixels = rel.size();
+  nr.mean_samples = on > 0 ? samples / static_cast<double>(on) : 0;
+  if (!rel.empty()) {
+    nr.median_rel_se = quantile(rel, 0.5);
+    nr.p95_rel_se = quantile(rel, 0.95);
+    nr.max_rel_se = *std::max_element(rel.begin(), rel.end());
+    const auto ok = std::count_if(rel.begin(), rel.end(),
+                                  [&](double r) { return r <= o.rel_se * (1 + 1e-9); });
+    nr.converged_fraction = static_cast<double>(ok) / static_cast<double>(rel.size());
+  }
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+}  // namespace gonio::twin
