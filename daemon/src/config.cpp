@@ -3,6 +3,7 @@
 
 #include <arpa/inet.h>
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -40,6 +41,63 @@ json node_to_json(const toml::node& n) {
   else if (const auto* t = n.as_time()) os << *t;
   return json(os.str());
 }
+
+// ---- JSON -> TOML text (json_to_toml). Written here rather than with toml++'s formatter,
+// which prints doubles with 17 digits (0.05 as 0.050000000000000003) or with 6.
+
+std::string toml_key(const std::string& k) {
+  const bool bare = !k.empty() && k.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                                      "abcdefghijklmnopqrstuvwxyz0123456789_-") ==
+                                      std::string::npos;
+  if (bare) return k;
+  return json(k).dump();  // a JSON string is a TOML basic string (same escapes)
+}
+
+bool is_table_array(const json& v) {
+  return v.is_array() && !v.empty() &&
+         std::all_of(v.begin(), v.end(), [](const json& e) { return e.is_object(); });
+}
+
+std::string toml_value(const json& v) {
+  if (v.is_string()) return v.dump();
+  if (v.is_boolean() || v.is_number_integer()) return v.dump();
+  if (v.is_number()) {
+    // Shortest text that reads back the same double; a float keeps a '.' or an exponent.
+    std::string t = fmt::format("{}", v.get<double>());
+    if (t.find_first_of(".eEn") == std::string::npos) t += ".0";
+    return t;
+  }
+  if (v.is_array()) {
+    std::string t = "[";
+    for (const auto& e : v) t += (t.size() > 1 ? ", " : "") + toml_value(e);
+    return t + "]";
+  }
+  if (v.is_object()) {  // inline table, for a table inside an array of scalars and tables
+    std::string t = "{";
+    for (const auto& [k, e] : v.items()) t += (t.size() > 1 ? ", " : " ") + toml_key(k) + " = " + toml_value(e);
+    return t + " }";
+  }
+  throw Error::invalid("config", "TOML has no null");
+}
+
+void toml_table(std::ostream& os, const json& t, const std::string& path) {
+  for (const auto& [k, v] : t.items())
+    if (!v.is_object() && !is_table_array(v) && !v.is_null()) os << toml_key(k) << " = " << toml_value(v) << "\n";
+  for (const auto& [k, v] : t.items()) {
+    const auto sub = path.empty() ? toml_key(k) : path + "." + toml_key(k);
+    if (v.is_object()) {
+      os << "\n[" << sub << "]\n";
+      toml_table(os, v, sub);
+    } else if (is_table_array(v)) {
+      for (const auto& e : v) {
+        os << "\n[[" << sub << "]]\n";
+        toml_table(os, e, sub);
+      }
+    }
+  }
+}
+
+double in_seconds(milliseconds ms) { return static_cast<double>(ms.count()) / 1000.0; }
 
 milliseconds seconds_in(ObjectReader& r, const std::string& key, milliseconds fallback,
                         double lo_s, double hi_s) {
@@ -149,6 +207,71 @@ json toml_to_json(std::string_view text, std::string_view source) {
                             e.source().begin.column, e.description()),
                 "config");
   }
+}
+
+std::string json_to_toml(const json& doc) {
+  if (!doc.is_object()) throw Error::invalid("config", "a TOML document is a table");
+  std::ostringstream os;
+  toml_table(os, doc, "");
+  auto text = os.str();
+  if (!text.empty() && text.front() == '\n') text.erase(0, 1);
+  return text;
+}
+
+json Config::to_json() const {
+  json listen_uris = json::array();
+  for (const auto& u : listen) listen_uris.push_back(u.to_string());
+  json doc;
+  doc["server"] = {{"listen", listen_uris},
+                   {"allow_remote", allow_remote},
+                   {"io_threads", io_threads},
+                   {"rpc_threads", rpc_threads},
+                   {"max_message_bytes", max_message_bytes},
+                   {"read_timeout_s", in_seconds(read_timeout)},
+                   {"idle_timeout_s", in_seconds(idle_timeout)},
+                   {"max_queue", max_queue},
+                   {"max_connections", max_connections},
+                   {"log_level", log_level}};
+  if (!tokens.empty()) {
+    json list = json::array();
+    for (const auto& t : tokens)
+      list.push_back({{"name", t.name}, {"role", to_text(t.role)}, {"sha256", t.sha256}});
+    doc["auth"] = {{"token", list}};
+  }
+  doc["store"] = {{"synchronous", synchronous_full ? "full" : "normal"}};
+  json lim = {{"incidence", {limits.incidence_min, limits.incidence_max}},
+              {"receive", {limits.receive_min, limits.receive_max}},
+              {"rotation", {limits.rotation_min, limits.rotation_max}},
+              {"tilt", {limits.tilt_min, limits.tilt_max}}};
+  if (limits.min_separation) lim["min_separation"] = *limits.min_separation;
+  doc["instrument"] = {{"profile", profile},
+                       {"move_timeout_s", in_seconds(move_timeout)},
+                       {"home_timeout_s", in_seconds(home_timeout)},
+                       {"measure_timeout_s", in_seconds(measure_timeout)},
+                       {"settle_s", in_seconds(settle)},
+                       {"auto_resume", auto_resume},
+                       {"auto_resume_delay_s", in_seconds(auto_resume_delay)},
+                       {"max_auto_resumes", max_auto_resumes},
+                       {"limits", lim}};
+  if (!motion.empty()) doc["instrument"]["motion"] = motion;
+  if (!photometer.empty()) doc["instrument"]["photometer"] = photometer;
+  doc["twin"] = {{"threads", twin_threads},
+                 {"rel_se", twin_rel_se},
+                 {"max_samples", twin_max_samples},
+                 {"replicates", twin_replicates},
+                 {"seed", twin_seed}};
+  doc["divergence"] = {{"z_threshold", z_threshold},
+                       {"delta_e_threshold", delta_e_threshold},
+                       {"sustained_m", sustained_m},
+                       {"sustained_n", sustained_n},
+                       {"reference_drift", reference_drift},
+                       {"pause_on_sustained", pause_on_sustained}};
+  doc["webhook"] = {{"url", webhook_url},
+                    {"retries", webhook_retries},
+                    {"backoff_s", in_seconds(webhook_backoff)},
+                    {"timeout_s", in_seconds(webhook_timeout)},
+                    {"min_severity", webhook_min_severity}};
+  return doc;
 }
 
 Config Config::mock_defaults() {

@@ -6,7 +6,9 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <cstring>
 #include <fstream>
+#include <ostream>
 #include <thread>
 
 #include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange without it
@@ -34,6 +36,8 @@
 #include "gonio/daemon/twin_service.hpp"
 
 #include "gonio/proto/version.hpp"
+#include "gonio/proto/json_util.hpp"
+#include "gonio/registry/registry.hpp"
 
 namespace gonio::daemon {
 namespace {
@@ -115,7 +119,70 @@ void use_calibrated_profile(const Store& store, TwinService& twin) {
                stored->version, stored->created_at, stored->created_by);
 }
 
+// What is at a device's address now; the instrument may be unplugged while its config is
+// checked, so a missing device is reported, not refused.
+std::string device_state(const drivers::DeviceRef& d) {
+  using Kind = drivers::DeviceRef::Kind;
+  if (d.kind == Kind::tcp) return "a TCP endpoint, not tried";
+  if (d.kind == Kind::usb) return "a USB device by VID:PID, not looked up";
+  struct stat st {};
+  if (::stat(d.address.c_str(), &st) != 0)
+    return fmt::format("missing ({}): goniod reports the instrument unavailable and retries "
+                       "until it appears", std::strerror(errno));
+  if (S_ISCHR(st.st_mode)) return "present, a character device";
+  return "present, but not a character device";
+}
+
+std::string axes_text(const drivers::SideCheck& s) {
+  std::string text;
+  for (drivers::Axis a : s.axes) {
+    text += fmt::format("{}{}", text.empty() ? "" : ", ", to_text(a));
+    for (const auto& [axis, deg] : s.home)
+      if (axis == a) text += fmt::format(" (homes to {}°)", deg);
+  }
+  return text;
+}
+
 }  // namespace
+
+int check_config(const DaemonOptions& o, std::ostream& out, std::ostream& err) {
+  const std::string source = o.config_file.value_or("<no file>");
+  try {
+    const Config config = load_config(o);
+    try {
+      (void)twin::InstrumentProfile::load(config.profile);
+    } catch (const Error& e) {
+      throw json_util::prefixed(e, "instrument.profile");
+    }
+    drivers::InstrumentCheck inst;
+    try {
+      inst = drivers::check_instrument(json{{"motion", config.motion}, {"photometer", config.photometer}},
+                                       config.limits);
+    } catch (const Error& e) {
+      throw json_util::prefixed(e, "instrument");
+    }
+    out << fmt::format("# {}: valid. goniod {} would run with this configuration (every key,\n"
+                       "# defaults filled in); it also listens on unix:<state-dir>/goniod.sock.\n\n",
+                       source, GONIO_VERSION_STRING)
+        << json_to_toml(config.to_json()) << "\n\n"
+        << fmt::format("# instrument: motion driver '{}', axes {}; photometer driver '{}'\n",
+                       inst.motion_driver, axes_text(inst.motion), inst.photometer_driver)
+        << fmt::format("# the arms are kept {}° apart{}\n", inst.min_separation,
+                       config.limits.min_separation ? "" : " (the motion driver's default)");
+    std::vector<drivers::DeviceRef> devices = inst.motion.devices;
+    devices.insert(devices.end(), inst.photometer.devices.begin(), inst.photometer.devices.end());
+    if (devices.empty()) out << "# devices: none (no hardware)\n";
+    for (const auto& d : devices)
+      out << fmt::format("# device instrument.{} = {}: {}\n", d.field, d.address, device_state(d));
+    return exit_code::ok;
+  } catch (const Error& e) {
+    err << fmt::format("goniod: {}: {}\n", source, e.what());
+    return exit_code::usage;
+  } catch (const std::exception& e) {  // not a verdict on the file: a bug
+    err << fmt::format("goniod: {}: internal error: {}\n", source, e.what());
+    return exit_code::internal;
+  }
+}
 
 int run_daemon(const DaemonOptions& o) {
   ::umask(027);  // the store, its journal and endpoints.json: owner and group only

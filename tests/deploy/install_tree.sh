@@ -22,6 +22,7 @@ expected=(
   "$docdir/bsdf_spec.md" "$docdir/bsdf_formats.md" "$docdir/colorimetry.md"
   "$docdir/scpi-gonio.md" "$docdir/errors.md"
   "$docdir/examples/goniod-hardware.toml" "$docdir/examples/goniod-mock.toml"
+  "$docdir/copyright" "$docdir/changelog.gz"
 )
 # The whole tree, both ways: nothing missing, nothing else (gonio-devsim and gonio-load are
 # development tools: cmake --install --component tools).
@@ -72,6 +73,25 @@ for page in daemon/man/goniod.8 daemon/man/gonioctl.1 twin/man/gonio-twin.1 driv
   mtime=$(od -An -tu4 -j4 -N4 "$gz" | tr -d ' ')
   (( (flags & 8) == 0 && mtime == 0 )) || fail "$gz carries a file name or time stamp"
 done
+
+# Debian's two files of every package: the machine-readable copyright, and the changelog of
+# this version (a native package's changelog.gz), gzip -9n like the man pages.
+same "$docdir/copyright" systemd/debian/copyright
+head -1 "$r$docdir/copyright" | grep -q '^Format: https://www.debian.org/doc/packaging-manuals/copyright-format/1.0/$' ||
+  fail "$docdir/copyright is not in the machine-readable format"
+if changelog=$(gzip -dc "$r$docdir/changelog.gz"); then
+  [[ $(head -1 <<<"$changelog") == "gonio ($version) unstable; urgency=medium" ]] ||
+    fail "changelog starts '$(head -1 <<<"$changelog")', expected version $version"
+  maintainer=$(sed -n 's/^GONIO_PACKAGE_MAINTAINER:STRING=//p' "$build/CMakeCache.txt")
+  trailer=$(grep '^ -- ' <<<"$changelog" || true)
+  [[ $trailer == " -- $maintainer  "* ]] &&
+    grep -Eq '  [A-Z][a-z]{2}, [0-9]{2} [A-Z][a-z]{2} [0-9]{4} [0-9:]{8} \+0000$' <<<"$trailer" ||
+    fail "changelog trailer is not ' -- $maintainer  DATE' (RFC 2822):"$'\n'"$changelog"
+  flags=$(od -An -tu1 -j3 -N1 "$r$docdir/changelog.gz" | tr -d ' ')
+  ((flags & 8)) && fail "$docdir/changelog.gz carries a file name"
+else
+  fail "$docdir/changelog.gz is not gzip"
+fi
 
 # The installed programs run from the tree (no build-tree RPATH or missing library).
 for exe in goniod gonioctl gonio-twin gonio-probe; do

@@ -1,5 +1,7 @@
 // goniod — the gonio service: schedules and runs scans, stores measured and predicted points
 // side by side, raises divergence alerts, and serves JSON-RPC (daemon/README.md).
+#include <iostream>
+
 #include <CLI/CLI.hpp>
 
 #include "gonio/daemon/daemon.hpp"
@@ -9,9 +11,15 @@ int main(int argc, char** argv) {
   CLI::App app{"goniod — goniometric spectrophotometer service with a digital twin"};
   gonio::daemon::DaemonOptions o;
   std::string state_dir;
-  app.add_option("--state-dir", state_dir, "directory for the store, the socket and admin.token")
-      ->required();
+  std::string check_file;
+  auto* state_opt =
+      app.add_option("--state-dir", state_dir, "directory for the store, the socket and admin.token");
   app.add_option("--config", o.config_file, "TOML configuration file");
+  auto* check_opt = app.add_option("--check-config", check_file,
+                                   "validate FILE, print the configuration goniod would run with "
+                                   "and exit (0: valid, 2: not)")
+                        ->excludes("--config")
+                        ->excludes(state_opt);
   app.add_option("--listen", o.listen,
                  "unix:PATH, tcp://HOST:PORT or http://HOST:PORT (repeatable; replaces "
                  "server.listen)");
@@ -23,6 +31,14 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : gonio::daemon::exit_code::usage;
+  }
+  if (*check_opt) {
+    o.config_file = check_file;
+    return gonio::daemon::check_config(o, std::cout, std::cerr);
+  }
+  if (!*state_opt) {
+    std::cerr << "--state-dir is required\nRun with --help for more information.\n";
+    return gonio::daemon::exit_code::usage;
   }
   o.state_dir = state_dir;
   return gonio::daemon::run_daemon(o);

@@ -1,7 +1,9 @@
 // The static driver table and the instrument factory (registry.hpp).
 #include "gonio/registry/registry.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -20,14 +22,55 @@ std::unique_ptr<Photometer> scpi_serial(const nlohmann::json& c) { return scpi::
 std::unique_ptr<Photometer> scpi_tcp(const nlohmann::json& c) { return scpi::make_photometer("tcp", c); }
 std::unique_ptr<Photometer> scpi_usbtmc(const nlohmann::json& c) { return scpi::make_photometer("usbtmc", c); }
 
+SideCheck check_of(const MotionController& m) {
+  SideCheck out;
+  out.axes = m.axes();
+  for (Axis a : out.axes)
+    if (const auto h = m.home_position(a)) out.home.emplace_back(a, *h);
+  return out;
+}
+
+SideCheck check_modbus(const nlohmann::json& c) {
+  const auto cfg = modbus::MotionConfig::from_json(c);
+  // The controller opens its links at its first call: building it checks what libmodbus
+  // accepts of the link settings without sending a byte.
+  auto out = check_of(*make_modbus_motion(cfg));
+  for (const auto& l : cfg.links) {
+    const auto link = "motion.links." + l.name;
+    if (l.kind == modbus::LinkConfig::Kind::rtu)
+      out.devices.push_back({DeviceRef::Kind::path, link + ".device", l.device});
+    else
+      out.devices.push_back({DeviceRef::Kind::tcp, link + ".host", fmt::format("{}:{}", l.host, l.port)});
+  }
+  return out;
+}
+// The mock is a simulation: building it opens nothing.
+SideCheck check_mock_motion(const nlohmann::json& c) { return check_of(*mock::make_mock_motion(c)); }
+SideCheck check_mock_photometer(const nlohmann::json& c) {
+  (void)mock::make_mock_photometer(c);
+  return {};
+}
+SideCheck check_scpi(std::string_view transport, const nlohmann::json& c) {
+  auto device = scpi::check_photometer(transport, c);
+  device.field = join_field("photometer", device.field);
+  return {{}, {}, {device}};
+}
+SideCheck check_scpi_serial(const nlohmann::json& c) { return check_scpi("serial", c); }
+SideCheck check_scpi_tcp(const nlohmann::json& c) { return check_scpi("tcp", c); }
+SideCheck check_scpi_usbtmc(const nlohmann::json& c) { return check_scpi("usbtmc", c); }
+
 const std::array<DriverInfo, 5> kDrivers{{
     {"modbus", "Modbus RTU/TCP motion controllers (Oriental Motor AZ preset)", true, false, true,
-     &modbus_motion, nullptr},
+     &modbus_motion, nullptr, nullptr, &check_modbus, nullptr},
     {"mock", "virtual lab driven by the twin (no hardware)", true, true, false,
-     &mock::make_mock_motion, &mock::make_mock_photometer, &mock::default_min_separation},
-    {"scpi-serial", "SCPI photometer on a serial line", false, true, true, nullptr, &scpi_serial},
-    {"scpi-tcp", "SCPI photometer on a raw TCP socket", false, true, true, nullptr, &scpi_tcp},
-    {"scpi-usbtmc", "SCPI photometer over USBTMC (libusb)", false, true, true, nullptr, &scpi_usbtmc},
+     &mock::make_mock_motion, &mock::make_mock_photometer, &mock::default_min_separation,
+     &check_mock_motion, &check_mock_photometer},
+    {"scpi-serial", "SCPI photometer on a serial line", false, true, true, nullptr, &scpi_serial,
+     nullptr, nullptr, &check_scpi_serial},
+    {"scpi-tcp", "SCPI photometer on a raw TCP socket", false, true, true, nullptr, &scpi_tcp,
+     nullptr, nullptr, &check_scpi_tcp},
+    {"scpi-usbtmc", "SCPI photometer over USBTMC (libusb)", false, true, true, nullptr, &scpi_usbtmc,
+     nullptr, nullptr, &check_scpi_usbtmc},
 }};
 
 std::string names() {
@@ -57,6 +100,15 @@ std::pair<std::string, nlohmann::json> split(const nlohmann::json& side, const s
   nlohmann::json rest = side;
   rest.erase("driver");
   return {name, rest};
+}
+
+// The widest in-plane angle between the arms over the limits rectangle: their separation is
+// |θi + θr| wrapped into [0°, 180°] (collision.hpp), and θi + θr covers [lo, hi].
+double widest_separation(double lo, double hi) {
+  if (hi - lo >= 360) return 180;
+  const double k = std::ceil((lo - 180) / 360);
+  if (180 + 360 * k <= hi) return 180;
+  return std::max(MotionGuard::arm_separation(lo, 0), MotionGuard::arm_separation(hi, 0));
 }
 
 }  // namespace
@@ -136,6 +188,72 @@ Instrument open_instrument(const nlohmann::json& config, const MotionGuard& guar
     throw Error::invalid("photometer.driver", fmt::format("'{}' has no photometer side", pname));
   out.motion = guarded(wrap("motion", [&] { return md.make_motion(mcfg); }));
   out.photometer = wrap("photometer", [&] { return pd.make_photometer(pcfg); });
+  return out;
+}
+
+InstrumentCheck check_instrument(const nlohmann::json& config, const MotionLimits& limits) {
+  json_util::ObjectReader r(config, "");
+  const auto* m = r.raw("motion");
+  const auto* p = r.raw("photometer");
+  r.finish();
+  if (m == nullptr) throw Error::invalid("motion", "is required");
+  if (p == nullptr) throw Error::invalid("photometer", "is required");
+  auto motion_split = split(*m, "motion");
+  auto photometer_split = split(*p, "photometer");
+  InstrumentCheck out;
+  out.motion_driver = motion_split.first;
+  out.photometer_driver = photometer_split.first;
+  const nlohmann::json mcfg = std::move(motion_split.second);
+  const nlohmann::json pcfg = std::move(photometer_split.second);
+
+  const auto named = [](const std::string& field, const std::string& name) -> const DriverInfo& {
+    try {
+      return find_driver(name);
+    } catch (const Error& e) {
+      throw Error(e.code(), fmt::format("{}: {}", field, e.what()), field);
+    }
+  };
+  const auto& md = named("motion.driver", out.motion_driver);
+  const auto& pd = named("photometer.driver", out.photometer_driver);
+  if (!md.check_motion)
+    throw Error::invalid("motion.driver", fmt::format("'{}' has no motion side", out.motion_driver));
+  if (!pd.check_photometer)
+    throw Error::invalid("photometer.driver", fmt::format("'{}' has no photometer side", out.photometer_driver));
+  out.motion = prefixed("motion", [&] { return md.check_motion(mcfg); });
+  if (out.motion_driver == "mock" && out.photometer_driver == "mock") {
+    if (!pcfg.empty())
+      throw Error::invalid("photometer", "a mock photometer shares the motion side's lab: "
+                                         "configure it under \"motion\"");
+  } else {
+    out.photometer = prefixed("photometer", [&] { return pd.check_photometer(pcfg); });
+  }
+
+  const MotionGuard guard = motion_guard(limits, *m);
+  out.min_separation = guard.min_separation_deg();
+  for (Axis arm : {Axis::incidence, Axis::receive})
+    if (std::find(out.motion.axes.begin(), out.motion.axes.end(), arm) == out.motion.axes.end())
+      throw Error::invalid("motion.axes", fmt::format("the motion driver has no '{}' axis: scans "
+                                                      "move both arms, incidence and receive",
+                                                      to_text(arm)));
+  for (const auto& [axis, deg] : out.motion.home) {
+    const auto lim = limits.of(axis);
+    if (!(deg >= lim.min_deg && deg <= lim.max_deg))
+      throw Error(Errc::out_of_range,
+                  fmt::format("limits.{}: homing ends the axis at {}°, outside [{}, {}]°: the "
+                              "guard would refuse to home it",
+                              to_text(axis), deg, lim.min_deg, lim.max_deg),
+                  fmt::format("limits.{}", to_text(axis)));
+  }
+  const double widest = widest_separation(limits.incidence_min + limits.receive_min,
+                                          limits.incidence_max + limits.receive_max);
+  if (widest < out.min_separation)
+    throw Error(Errc::out_of_range,
+                fmt::format("limits.min_separation = {}° is wider than any position within "
+                            "limits.incidence [{}, {}]° and limits.receive [{}, {}]° allows "
+                            "(at most {}°): every geometry would be refused",
+                            out.min_separation, limits.incidence_min, limits.incidence_max,
+                            limits.receive_min, limits.receive_max, widest),
+                "limits.min_separation");
   return out;
 }
 

@@ -194,11 +194,21 @@ std::unique_ptr<Photometer> make_photometer(TransportPtr transport, PhotometerCo
 
 std::unique_ptr<Photometer> make_photometer(std::string_view transport_type,
                                             const nlohmann::json& config) {
-  json_util::ObjectReader r(config, "photometer");
+  // No context of its own: the registry names the side ("photometer.baud").
+  json_util::ObjectReader r(config, "");
   auto pc = PhotometerConfig::read(r);
-  auto open = read_transport(transport_type, r);
+  auto transport = read_transport(transport_type, r);
   r.finish();
-  return make_photometer(open(), std::move(pc));
+  return make_photometer(transport.open(), std::move(pc));
+}
+
+DeviceRef check_photometer(std::string_view transport_type, const nlohmann::json& config) {
+  // No context of its own: the registry names the side ("photometer.baud").
+  json_util::ObjectReader r(config, "");
+  (void)PhotometerConfig::read(r);
+  auto transport = read_transport(transport_type, r);
+  r.finish();
+  return transport.device;
 }
 
 }  // namespace gonio::drivers::scpi

@@ -162,5 +162,48 @@ TEST(Config, MockDefaultsUseTheDemoSample) {
   EXPECT_EQ(c.photometer["driver"], "mock");
 }
 
+// What goniod --check-config prints is the Config itself: its TOML reads back to the same
+// Config, with every key present, for both examples and for values that need care (0.05 is
+// not exactly representable; strings need escapes; tokens are an array of tables).
+TEST(Config, EffectiveConfigRoundTripsThroughToml) {
+  auto tricky = Config::parse(R"(
+[server]
+listen = ["unix:/run/gonio/a \"b\".sock"]
+[instrument]
+settle_s = 0.05
+[instrument.limits]
+receive = [-82.123456789, 82]
+[instrument.motion]
+driver = "mock"
+[instrument.photometer]
+driver = "mock"
+[[auth.token]]
+name = "lab-viewer"
+role = "viewer"
+sha256 = "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+[divergence]
+reference_drift = 0.05
+)", "tricky.toml");
+  for (const auto& c : {Config::load(GONIO_SOURCE_DIR "/daemon/examples/goniod-mock.toml"),
+                        Config::load(GONIO_SOURCE_DIR "/daemon/examples/goniod-hardware.toml"),
+                        tricky, Config{}}) {
+    const auto text = json_to_toml(c.to_json());
+    SCOPED_TRACE(text);
+    const auto back = Config::parse(text, "effective.toml");
+    EXPECT_EQ(back.to_json(), c.to_json());
+  }
+  const auto text = json_to_toml(tricky.to_json());
+  EXPECT_NE(text.find("reference_drift = 0.05\n"), std::string::npos);
+  EXPECT_NE(text.find("receive = [-82.123456789, 82.0]\n"), std::string::npos);
+  EXPECT_NE(text.find("[[auth.token]]\n"), std::string::npos);
+  // Every key of every table, defaults included.
+  const auto doc = Config{}.to_json();
+  for (const char* key : {"listen", "allow_remote", "io_threads", "rpc_threads", "max_message_bytes",
+                          "read_timeout_s", "idle_timeout_s", "max_queue", "max_connections", "log_level"})
+    EXPECT_TRUE(doc["server"].contains(key)) << key;
+  EXPECT_EQ(doc["instrument"]["limits"]["incidence"], nlohmann::json::array({0.0, 85.0}));
+  EXPECT_EQ(doc["webhook"]["min_severity"], "warning");
+}
+
 }  // namespace
 }  // namespace gonio::daemon

@@ -127,9 +127,15 @@ struct Config {
   static Config load(const std::string& path, const std::optional<Config>& base = std::nullopt);
   // Checks cross-field rules (sustained_m <= sustained_n, loopback unless allow_remote).
   void validate() const;
+  // Every key of the file with the value in effect, defaults filled in, in the file's units
+  // and layout ([server], [instrument.limits], ...): what goniod --check-config prints.
+  // Config::parse of its TOML text (to_toml) gives this Config back.
+  nlohmann::json to_json() const;
 };
 
 // TOML document → JSON (tables → objects, arrays → arrays, dates → ISO strings).
 nlohmann::json toml_to_json(std::string_view toml_text, std::string_view source);
+// JSON object → TOML document text, the way back for what toml_to_json gives.
+std::string json_to_toml(const nlohmann::json& doc);
 
 }  // namespace gonio::daemon

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <filesystem>
+#include <iosfwd>
 #include <optional>
 #include <string>
 #include <vector>
@@ -28,5 +29,13 @@ struct DaemonOptions {
 };
 
 int run_daemon(const DaemonOptions& options);
+
+// goniod --check-config FILE: reads FILE (with --mock, --listen and --log-level applied as
+// run_daemon would), validates every key, the driver tables through the registry (opening
+// no device), the instrument profile and the limits against the motion driver, and prints
+// to `out` the configuration goniod would run with as TOML (every key, defaults filled in)
+// followed by comments on the instrument and whether each device it names exists. Returns
+// exit_code::ok, or exit_code::usage with the error (file, field, allowed range) on `err`.
+int check_config(const DaemonOptions& options, std::ostream& out, std::ostream& err);
 
 }  // namespace gonio::daemon

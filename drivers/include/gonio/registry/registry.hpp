@@ -18,11 +18,17 @@
 // (MotionLimits, goniod's [instrument.limits]). Drivers hold no limits of their own. An
 // unset min_separation takes the motion driver's default: the mock lab's profile clearance
 // for "mock", kDefaultMinSeparationDeg (motion/limits.hpp) for every other driver.
+//
+// check_instrument reads the same config as open_instrument, with the same errors, and
+// opens nothing: it is what `goniod --check-config` runs.
 #pragma once
 
 #include <memory>
 #include <span>
+#include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json_fwd.hpp>
 
@@ -30,8 +36,16 @@
 #include "gonio/drivers/motion/limits.hpp"
 #include "gonio/drivers/motion/motion_controller.hpp"
 #include "gonio/drivers/photometer/photometer.hpp"
+#include "gonio/drivers/transport/transport.hpp"
 
 namespace gonio::drivers {
+
+// What one side's driver config gives, found without opening a device.
+struct SideCheck {
+  std::vector<Axis> axes;                     // motion: the axes the controller drives
+  std::vector<std::pair<Axis, double>> home;  // motion: where homing ends, where the driver knows
+  std::vector<DeviceRef> devices;             // what the driver would open
+};
 
 struct DriverInfo {
   std::string_view name;
@@ -44,6 +58,10 @@ struct DriverInfo {
   // The minimum arm separation when the limits table sets none (nullptr:
   // kDefaultMinSeparationDeg).
   double (*default_min_separation)(const nlohmann::json& config) = nullptr;
+  // Read the side's config as make_motion / make_photometer do, with the same errors, and
+  // open nothing (set for every side the driver provides).
+  SideCheck (*check_motion)(const nlohmann::json& config) = nullptr;
+  SideCheck (*check_photometer)(const nlohmann::json& config) = nullptr;
 };
 
 std::span<const DriverInfo> drivers() noexcept;
@@ -70,5 +88,17 @@ struct Instrument {
 Instrument open_instrument(const nlohmann::json& config, const MotionGuard& guard);
 // The same, with the guard of `limits` (motion_guard).
 Instrument open_instrument(const nlohmann::json& config, const MotionLimits& limits = {});
+
+struct InstrumentCheck {
+  std::string motion_driver, photometer_driver;
+  double min_separation = 0;  // in effect: the limits table's or the motion driver's default
+  SideCheck motion, photometer;
+};
+// The instrument config above and `limits` checked as open_instrument would take them, plus
+// the agreement of the limits with the motion driver: the arms (incidence and receive) are
+// among its axes, every home position it knows lies within its axis's limits, and some
+// position within the limits keeps the arms min_separation apart. Opens nothing; errors
+// name the field ("motion.links.bus.baud", "limits.receive", "limits.min_separation").
+InstrumentCheck check_instrument(const nlohmann::json& config, const MotionLimits& limits);
 
 }  // namespace gonio::drivers

@@ -113,5 +113,8 @@ std::unique_ptr<Photometer> make_photometer(TransportPtr transport, PhotometerCo
 // "usbtmc") from the same JSON object that holds the photometer keys; unknown keys rejected.
 std::unique_ptr<Photometer> make_photometer(std::string_view transport_type,
                                             const nlohmann::json& config);
+// Reads the same config as make_photometer, with the same errors, and returns the device
+// it names without opening it.
+DeviceRef check_photometer(std::string_view transport_type, const nlohmann::json& config);
 
 }  // namespace gonio::drivers::scpi

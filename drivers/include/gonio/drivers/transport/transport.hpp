@@ -60,9 +60,24 @@ class Transport {
 
 using TransportPtr = std::unique_ptr<Transport>;
 
+// A device that a driver config names, as the driver would open it: what goniod
+// --check-config reports without opening anything.
+struct DeviceRef {
+  enum class Kind { path, tcp, usb };
+  Kind kind = Kind::path;
+  std::string field;    // the config key that names it: "photometer.device"
+  std::string address;  // "/dev/gonio/photometer", "192.168.0.10:5025", "1313:8078"
+};
+
+struct TransportSpec {
+  DeviceRef device;
+  std::function<TransportPtr()> open;
+};
+
 // Reads the keys a transport of `type` ("serial", "tcp", "usbtmc") owns in `r` (see
-// transport/serial.hpp, transport/tcp.hpp, usbtmc/usbtmc.hpp) and returns what opens it, so
-// that the caller can reject unknown keys (r.finish()) before any device is touched.
-std::function<TransportPtr()> read_transport(std::string_view type, json_util::ObjectReader& r);
+// transport/serial.hpp, transport/tcp.hpp, usbtmc/usbtmc.hpp) and returns the device and
+// what opens it, so that the caller can reject unknown keys (r.finish()) before any device
+// is touched, or check a config without opening it at all.
+TransportSpec read_transport(std::string_view type, json_util::ObjectReader& r);
 
 }  // namespace gonio::drivers
