@@ -19,6 +19,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <exception>
 #include <mutex>
 #include <thread>
@@ -132,6 +133,7 @@ void RenderOptions::validate() const {
 SphereImage render_sphere(const Bsdf& bsdf, const RenderOptions& o) {
   o.validate();
   const auto t0 = std::chrono::steady_clock::now();
+  const std::clock_t c0 = std::clock();
   const render::Scene scene(o.lighting);
   // The control variate's tables are needed only under an environment.
   const render::ColourBsdf cb(bsdf, o.colour, scene.has_environment(), o.threads);
@@ -318,6 +320,7 @@ SphereImage render_sphere(const Bsdf& bsdf, const RenderOptions& o) {
     nr.converged_fraction = static_cast<double>(ok) / static_cast<double>(rel.size());
   }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.cpu_seconds = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
   return out;
 }
 
