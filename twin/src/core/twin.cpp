@@ -80,6 +80,9 @@ void EstimatorOptions::validate() const {
   if (!(abs_se >= 0 && abs_se <= 1)) throw Error::out_of_range("abs_se", abs_se, 0, 1);
   if (replicates < 4 || replicates > 256)
     throw Error::out_of_range("replicates", replicates, 4, 256);
+  if (first_points < 4 || first_points > 4096 || (first_points & (first_points - 1)) != 0)
+    throw Error::invalid("first_points",
+                         fmt::format("{} is not a power of two from 4 to 4096", first_points));
   if (max_samples < 1024 || max_samples > (1ull << 34))
     throw Error::out_of_range("max_samples", static_cast<double>(max_samples), 1024,
                               static_cast<double>(1ull << 34));
@@ -183,7 +186,7 @@ Prediction Twin::predict(const Geometry& g, const EstimatorOptions& options) con
   }
 
   const std::uint64_t paths_per_point = static_cast<std::uint64_t>(R) * (fixed ? 1 : 2);
-  std::uint64_t n = 64;
+  std::uint64_t n = options.first_points;
   std::vector<double> num(static_cast<std::size_t>(R)), den(static_cast<std::size_t>(R));
   for (;;) {
     est.run_until(n);

@@ -11,11 +11,15 @@
 //   with the power heuristic w_b = p_b² / (p_b² + p_e²), w_e = p_e² / (p_b² + p_e²).
 // h is a control variate: its expectation under the sampler is known exactly, so subtracting
 // it inside and adding it outside is unbiased, and it removes both the sampler's mismatch
-// and the dome's gradient across the lobe — what is left is the dome's curvature. Batches of min_samples run until the s.e. of Y reaches the target.
+// and the dome's gradient across the lobe — what is left is the dome's curvature.
+// Samples come in small randomised QMC nets (RqmcNet); batches of about min_samples run until
+// the standard error of Y, from the spread of the nets' means, reaches the target.
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <exception>
 #include <mutex>
 #include <thread>
@@ -41,11 +45,11 @@ void check_range(const char* field, double v, double lo, double hi, std::string_
 class SplitMix {
  public:
   explicit SplitMix(std::uint64_t seed) : s_(seed) {}
-  double uniform() {
+  std::uint64_t next() {
     std::uint64_t z = (s_ += 0x9e3779b97f4a7c15ULL);
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
     z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
+    return z ^ (z >> 31);
   }
 
  private:
@@ -54,8 +58,49 @@ class SplitMix {
 
 using render::Colour;
 
+// One randomised net of 2^bits points for a pixel sample's six dimensions: (u1, u2) the BSDF
+// direction and (u4, u5) the emitter direction each the first two Sobol dimensions, a
+// (0, m, 2)-net, under its own Owen scramble (Owen 1995; hashed as in Burley, "Practical
+// Hash-based Owen Scrambling", JCGT 2020); the emitter pair's point order is itself
+// Owen-shuffled so that the two pairs are not stratified alike (Burley 2020). u0 and u3
+// (lobe and emitter choice) are Sobol dimensions 2 and 3, stratified in one dimension.
+// Every point is uniform on [0, 1)^6, so a net's mean is unbiased; nets drawn with
+// independent scrambles are independent, so the spread of net means gives an honest
+// standard error while each net integrates the smooth parts far better than 2^bits
+// independent points (variance O(n^-3) for smooth 2-D integrands, Owen 1997).
+class RqmcNet {
+ public:
+  RqmcNet(const std::vector<std::uint32_t>& sobol, SplitMix& rng, int bits)
+      : sobol_(sobol), bits_(bits) {
+    for (auto& k : seed_) k = static_cast<std::uint32_t>(rng.next() >> 32);
+  }
+  void point(std::uint32_t i, double u[6]) const {
+    const auto& t = sobol_;
+    const auto at = [&](std::uint32_t k, int d, int s) {
+      return detail::to_unit(detail::owen_scramble(t[k * detail::kSobolDims + static_cast<std::size_t>(d)],
+                                                   seed_[static_cast<std::size_t>(s)]));
+    };
+    const std::uint32_t j =
+        bits_ == 0 ? 0 : detail::owen_scramble(i << (32 - bits_), seed_[6]) >> (32 - bits_);
+    u[0] = at(i, 2, 0);
+    u[1] = at(i, 0, 1);
+    u[2] = at(i, 1, 2);
+    u[3] = at(j, 3, 3);
+    u[4] = at(j, 0, 4);
+    u[5] = at(j, 1, 5);
+  }
+
+ private:
+  const std::vector<std::uint32_t>& sobol_;
+  int bits_;
+  std::array<std::uint32_t, 7> seed_{};
+};
+
 constexpr int kCoverageGrid = 8;       // sub-pixel grid for the silhouette's coverage
 constexpr int kSilhouetteBatches = 4;  // sample budget of partly covered pixels, in batches
+// Points per randomised net (see RqmcNet): 1 makes the samples independent, larger nets
+// integrate smooth parts better but leave fewer nets to estimate the error from.
+constexpr int kNetPoints = 8;
 
 double quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
@@ -88,6 +133,7 @@ void RenderOptions::validate() const {
 SphereImage render_sphere(const Bsdf& bsdf, const RenderOptions& o) {
   o.validate();
   const auto t0 = std::chrono::steady_clock::now();
+  const std::clock_t c0 = std::clock();
   const render::Scene scene(o.lighting);
   // The control variate's tables are needed only under an environment.
   const render::ColourBsdf cb(bsdf, o.colour, scene.has_environment(), o.threads);
@@ -105,6 +151,13 @@ SphereImage render_sphere(const Bsdf& bsdf, const RenderOptions& o) {
   const bool stochastic = scene.has_environment() || scene.has_emitters();
   const bool use_cv = cb.isotropic() && cb.has_moments();
   const double floor = kLitFloor / o.exposure;
+  // Samples come in nets of net_points (at most kNetPoints, and at least four nets per
+  // batch so that the first check has a standard error to go on).
+  int net_bits = 0;
+  while ((2 << net_bits) <= kNetPoints && (4 << (net_bits + 1)) <= o.min_samples) ++net_bits;
+  const std::uint32_t net_points = 1u << net_bits;
+  const auto& sobol = detail::SobolTable::get(net_points);
+  const int nets_per_batch = (o.min_samples + static_cast<int>(net_points) - 1) >> net_bits;
 
   std::atomic<int> next_row{0};
   std::exception_ptr failure;
@@ -171,41 +224,48 @@ SphereImage render_sphere(const Bsdf& bsdf, const RenderOptions& o) {
           }
           Colour sum{0, 0, 0};
           double sum_y = 0, sum_y2 = 0;
-          int n_samples = 0;
+          int n_samples = 0, n_nets = 0;
           double se = 0;
           if (stochastic) {
             SplitMix rng(detail::mix64(o.seed) ^ (static_cast<std::uint64_t>(py) << 32 |
                                                   static_cast<std::uint64_t>(px)));
             for (;;) {
-              for (int b = 0; b < o.min_samples; ++b) {
-                Colour v{0, 0, 0};
-                const double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
-                const double u3 = rng.uniform(), u4 = rng.uniform(), u5 = rng.uniform();
-                if (const auto s = cb.sample(wo, u0, {u1, u2}); s && s->wi.z > 0 && s->pdf > 0) {
-                  const Vec3 w = frame.to_world(s->wi);
-                  double l = use_cv ? scene.environment(w) - l_bar - dot(g, w - r)
-                                    : scene.environment(w);
-                  if (const double e = scene.emitted(w); e > 0) {
-                    const double pe = scene.emitter_pdf(w);
-                    l += e * s->pdf * s->pdf / (s->pdf * s->pdf + pe * pe);
+              for (int b = 0; b < nets_per_batch; ++b) {
+                // One net: net_points scrambled Sobol points, its mean one independent
+                // sample of the pixel for the standard error.
+                const RqmcNet net(sobol, rng, net_bits);
+                Colour net_sum{0, 0, 0};
+                for (std::uint32_t i = 0; i < net_points; ++i) {
+                  double u[6];
+                  net.point(i, u);
+                  if (const auto s = cb.sample(wo, u[0], {u[1], u[2]}); s && s->wi.z > 0 && s->pdf > 0) {
+                    const Vec3 w = frame.to_world(s->wi);
+                    double l = use_cv ? scene.environment(w) - l_bar - dot(g, w - r)
+                                      : scene.environment(w);
+                    if (const double e = scene.emitted(w); e > 0) {
+                      const double pe = scene.emitter_pdf(w);
+                      l += e * s->pdf * s->pdf / (s->pdf * s->pdf + pe * pe);
+                    }
+                    if (l != 0) add(net_sum, cb.eval(s->wi, wo), s->wi.z * l / s->pdf);
                   }
-                  if (l != 0) add(v, cb.eval(s->wi, wo), s->wi.z * l / s->pdf);
-                }
-                if (scene.has_emitters()) {
-                  const auto es = scene.sample_emitter(u3, {u4, u5});
-                  const Vec3 wl = frame.to_local(es.w);
-                  if (wl.z > 0 && es.pdf > 0) {
-                    const double pb = cb.pdf(wo, wl);
-                    const double w = es.pdf * es.pdf / (es.pdf * es.pdf + pb * pb);
-                    add(v, cb.eval(wl, wo), wl.z * es.radiance * w / es.pdf);
+                  if (scene.has_emitters()) {
+                    const auto es = scene.sample_emitter(u[3], {u[4], u[5]});
+                    const Vec3 wl = frame.to_local(es.w);
+                    if (wl.z > 0 && es.pdf > 0) {
+                      const double pb = cb.pdf(wo, wl);
+                      const double w = es.pdf * es.pdf / (es.pdf * es.pdf + pb * pb);
+                      add(net_sum, cb.eval(wl, wo), wl.z * es.radiance * w / es.pdf);
+                    }
                   }
                 }
-                add(sum, v, 1);
-                sum_y += v[1];
-                sum_y2 += v[1] * v[1];
+                add(sum, net_sum, 1);
+                const double v = net_sum[1] / net_points;
+                sum_y += v;
+                sum_y2 += v * v;
               }
-              n_samples += o.min_samples;
-              const double nn = n_samples;
+              n_nets += nets_per_batch;
+              n_samples = n_nets * static_cast<int>(net_points);
+              const double nn = n_nets;
               const double mean = sum_y / nn;
               const double var = std::max(0.0, (sum_y2 / nn - mean * mean) * nn / (nn - 1));
               se = std::sqrt(var / nn);
@@ -260,6 +320,7 @@ SphereImage render_sphere(const Bsdf& bsdf, const RenderOptions& o) {
     nr.converged_fraction = static_cast<double>(ok) / static_cast<double>(rel.size());
   }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.cpu_seconds = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
   return out;
 }
 

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 
 #include "tabulated/common.hpp"
@@ -45,8 +46,15 @@ const std::vector<double>& TableSampler::radial_edges_deg() {
 TableSampler::TableSampler(Density f, bool reflection, bool transmission, bool anisotropic)
     : f_(std::move(f)), reflection_(reflection), transmission_(transmission),
       anisotropic_(anisotropic) {
+  static std::atomic<std::uint64_t> next_id{1};
+  id_ = next_id++;
   const auto& edges = radial_edges_deg();
   const std::size_t rows = edges.size() - 1;
+  // Every edge is a multiple of 0.25°, so the row of r is that of floor(4r) / 4.
+  for (std::size_t q = 0, j = 0; q <= 4 * 180; ++q) {
+    while (j + 1 < rows && edges[j + 1] <= 0.25 * static_cast<double>(q)) ++j;
+    radial_row_.push_back(static_cast<std::uint8_t>(j));
+  }
   theta_nodes_ = static_cast<std::size_t>(std::lround(90.0 / kThetaStepDeg)) + 1;
   phi_nodes_ = anisotropic_ ? static_cast<std::size_t>(std::lround(360.0 / kPhiStepDeg)) : 1;
   for (const double e : edges) cos_edges_.push_back(std::cos(e * kDegToRad));
@@ -152,12 +160,22 @@ std::size_t TableSampler::components(const Vec3& wo, Component out[8]) const {
   return n;
 }
 
+const TableSampler::Query& TableSampler::query(const Vec3& wo) const {
+  thread_local Query q;
+  if (q.owner != id_ || q.wo.x != wo.x || q.wo.y != wo.y || q.wo.z != wo.z) {
+    q.owner = id_;
+    q.wo = wo;
+    q.n = components(wo, q.comps);
+    q.total = 0;
+    for (std::size_t c = 0; c < q.n; ++c) q.total += q.comps[c].weight;
+    q.frame = tab::MirrorFrame::of(wo);
+  }
+  return q;
+}
+
 double TableSampler::grid_density(const Grid& g, double r_deg, double a_rad) const {
-  const auto& edges = radial_edges_deg();
-  const std::size_t rows = edges.size() - 1;
-  const auto it = std::upper_bound(edges.begin(), edges.end(), r_deg);
-  std::size_t j = static_cast<std::size_t>(it - edges.begin());
-  j = std::min(j == 0 ? 0 : j - 1, rows - 1);
+  const double quarter = std::clamp(std::floor(4 * r_deg), 0.0, 4 * 180.0);
+  const std::size_t j = radial_row_[static_cast<std::size_t>(quarter)];
   const auto m = std::min(static_cast<std::size_t>(std::max(0.0, a_rad / kCellAz)),
                           static_cast<std::size_t>(kAzimuthCells) - 1);
   return g.value[j * kAzimuthCells + m] / g.integral;
@@ -177,13 +195,13 @@ double TableSampler::pdf(const Vec3& wo_in, const Vec3& wi_in) const {
     wo = tab::flip_z(wo);
     wi = tab::flip_z(wi);
   }
-  Component comps[8];
-  const std::size_t n = components(wo, comps);
-  double total = 0;
-  for (std::size_t c = 0; c < n; ++c) total += comps[c].weight;
+  const Query& q = query(wo);
+  const Component* comps = q.comps;
+  const std::size_t n = q.n;
+  const double total = q.total;
   const double def = defensive_pdf(wi);
   if (!(total > 0)) return def;
-  const auto frame = tab::MirrorFrame::of(wo);
+  const auto& frame = q.frame;
   double r[2] = {0, 0}, a[2] = {0, 0};
   bool have[2] = {false, false};
   double mix = 0;
@@ -202,10 +220,11 @@ std::optional<BsdfSample> TableSampler::sample(const Vec3& wo_in, double u_lobe,
   Vec3 wo = wo_in;
   const bool flip = wo.z < 0;
   if (flip) wo = tab::flip_z(wo);
-  Component comps[8];
-  const std::size_t n = components(wo, comps);
-  double total = 0;
-  for (std::size_t c = 0; c < n; ++c) total += comps[c].weight;
+  // A copy: pdf() below may replace this thread's Query.
+  const Query q = query(wo);
+  const Component* comps = q.comps;
+  const std::size_t n = q.n;
+  const double total = q.total;
 
   Vec3 wi;
   if (total > 0 && u_lobe >= kDefensive) {
@@ -223,7 +242,7 @@ std::optional<BsdfSample> TableSampler::sample(const Vec3& wo_in, double u_lobe,
     const double pa = cc[m + 1] - cc[m];
     const double ua = pa > 0 ? std::clamp((u.y - cc[m]) / pa, 0.0, 1.0) : 0.5;
     const double a = (static_cast<double>(m) + ua) * kCellAz;
-    const Vec3 d = tab::MirrorFrame::of(wo).direction(cos_r, a);
+    const Vec3 d = q.frame.direction(cos_r, a);
     wi = comps[c].transmission ? tab::flip_z(d) : d;
   } else {
     const double v = total > 0 ? u_lobe / kDefensive : u_lobe;

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -22,6 +23,7 @@
 #include <vector>
 
 #include "gonio/twin/bsdf.hpp"
+#include "tabulated/common.hpp"
 
 namespace gonio::twin::detail {
 
@@ -59,6 +61,18 @@ class TableSampler {
     double weight;
   };
 
+  // The mixture for one wo (components, their total, the mirror frame). Renderers ask for
+  // many wi at the same wo in a row, so the last one is kept per thread (keyed by id_).
+  struct Query {
+    std::uint64_t owner = 0;
+    Vec3 wo{};
+    Component comps[8];
+    std::size_t n = 0;
+    double total = 0;
+    tab::MirrorFrame frame;
+  };
+  const Query& query(const Vec3& wo) const;
+
   const Grid& grid(std::size_t theta_node, std::size_t phi_node, bool transmission) const;
   void build_node(std::size_t theta_node, std::size_t phi_node) const;
   std::size_t components(const Vec3& wo, Component out[8]) const;
@@ -66,6 +80,8 @@ class TableSampler {
   double defensive_pdf(const Vec3& wi) const;
 
   Density f_;
+  std::uint64_t id_;                      // unique per sampler, for the per-thread Query
+  std::vector<std::uint8_t> radial_row_;  // radial row per quarter degree (edges are multiples)
   bool reflection_, transmission_, anisotropic_;
   std::size_t theta_nodes_, phi_nodes_;
   std::vector<double> cos_edges_;         // cos of radial edges (decreasing)

@@ -285,20 +285,35 @@ void BsdfTable::interpolate(const std::array<double, 4>& p, std::span<double> ou
   const AxisPos a3 = azimuth_pos(axes_.p3, p[3], period, reduction_.bilateral);
   const std::size_t ch = channels();
   const std::size_t n = std::min(ch, out.size());
+  // Only the bracketing nodes with non-zero weight (an axis at a node or held constant has
+  // one), visited in the order of the 16-corner sum so that the result does not change.
+  const std::size_t stride[4] = {ch, ch * nodes(0), ch * nodes(0) * nodes(1),
+                                 ch * nodes(0) * nodes(1) * nodes(2)};
   const AxisPos* pos[4] = {&a0, &a1, &a2, &a3};
-  for (int corner = 0; corner < 16; ++corner) {
-    double w = 1;
-    std::size_t idx[4];
-    for (int k = 0; k < 4; ++k) {
-      const bool hi = (corner >> k) & 1;
-      const AxisPos& ap = *pos[k];
-      w *= hi ? ap.t : 1 - ap.t;
-      idx[k] = hi ? ap.i1 : ap.i0;
+  std::size_t off[4][2];
+  double wt[4][2];
+  int cnt[4];
+  for (int k = 0; k < 4; ++k) {
+    const AxisPos& ap = *pos[k];
+    cnt[k] = 0;
+    if (1 - ap.t != 0) {
+      off[k][cnt[k]] = ap.i0 * stride[k];
+      wt[k][cnt[k]++] = 1 - ap.t;
     }
-    if (w == 0) continue;
-    const double* v = values_.data() + index(idx[0], idx[1], idx[2], idx[3]) * ch;
-    for (std::size_t c = 0; c < n; ++c) out[c] += w * v[c];
+    if (ap.t != 0) {
+      off[k][cnt[k]] = ap.i1 * stride[k];
+      wt[k][cnt[k]++] = ap.t;
+    }
   }
+  for (int l = 0; l < cnt[3]; ++l)
+    for (int k = 0; k < cnt[2]; ++k)
+      for (int j = 0; j < cnt[1]; ++j)
+        for (int i = 0; i < cnt[0]; ++i) {
+          const double w = 1 * wt[0][i] * wt[1][j] * wt[2][k] * wt[3][l];
+          if (w == 0) continue;
+          const double* v = values_.data() + off[0][i] + off[1][j] + off[2][k] + off[3][l];
+          for (std::size_t c = 0; c < n; ++c) out[c] += w * v[c];
+        }
 }
 
 void BsdfTable::eval(const Vec3& wi, const Vec3& wo, std::span<double> out) const noexcept {

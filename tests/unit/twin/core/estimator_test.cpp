@@ -182,6 +182,38 @@ TEST(Twin, StandardErrorIsHonest) {
   EXPECT_GE(inside, 0.99 * trials);
 }
 
+TEST(Twin, StandardErrorIsHonestFromFewerFirstPoints) {
+  // The same with the first check after 32 points per replicate (what the renderer's
+  // measurement uses) and its 16 replicates: the check rests on the replicates' spread
+  // (15 d.o.f.: P(|t| > 3) ≈ 0.9 %), and easy geometries stop sooner.
+  const auto twin = make_twin(std::make_shared<TestPhong>(kGrid, 0.5, 5000.0));
+  const auto g = Geometry::in_plane(40, 39);
+  EstimatorOptions tight;
+  tight.rel_se = 1e-4;
+  tight.seed = 999;
+  const auto truth = twin.predict(g, tight);
+  ASSERT_TRUE(truth.diagnostics.converged);
+  int inside = 0;
+  const int trials = 400;
+  std::uint64_t fewer = 0, usual = 0;
+  for (int s = 0; s < trials; ++s) {
+    EstimatorOptions o;
+    o.rel_se = 2e-2;
+    o.replicates = 16;
+    o.seed = 5000 + static_cast<std::uint64_t>(s);
+    usual += twin.predict(g, o).samples;
+    o.first_points = 32;
+    const auto p = twin.predict(g, o);
+    fewer += p.samples;
+    if (std::abs(p.beta[0] - truth.beta[0]) <= 3 * p.std_error[0]) ++inside;
+  }
+  EXPECT_GE(inside, 0.98 * trials);
+  EXPECT_LT(fewer, usual);
+  EstimatorOptions bad;
+  bad.first_points = 48;
+  EXPECT_THROW(twin.predict(g, bad), Error);
+}
+
 TEST(Twin, DeterministicPerSeedAndThreadIndependent) {
   const auto twin = make_twin(std::make_shared<TestPhong>(kGrid, 0.5, 500.0));
   const auto grid = parse_geometry_grid("in=45;out=30:60:5");

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -245,6 +246,38 @@ TEST(Render, GlossySpheresReachTheNoiseTargetOrSaySo) {
       EXPECT_LE(r.noise.p95_rel_se, o.rel_se + 1e-12);
     }
   }
+}
+
+TEST(Render, ReportedNoiseIsTheNoiseBetweenSeeds) {
+  SKIP_UNLESS_OPTIMISED();
+  // Two renders with different seeds differ per pixel by their own noise: pooled over the
+  // lit pixels, that difference must agree with the standard errors the renders report, and
+  // the actual relative noise must be at the target — the adaptive stop may not fool itself.
+  const TestPhong phong(kGrid, 0.7, 150);
+  auto o = small(64);
+  o.lighting.environment = EnvironmentKind::sky;
+  o.lighting.light_size = 2;
+  o.rel_se = 0.02;
+  const auto a = render_sphere(phong, o);
+  o.seed = 7;
+  const auto b = render_sphere(phong, o);
+  double d2 = 0, se2 = 0, rel2 = 0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < a.xyz.size(); ++i) {
+    if (a.coverage[i] < 1 || a.xyz[i].y < kLitFloor || b.xyz[i].y < kLitFloor) continue;
+    const double d = a.xyz[i].y - b.xyz[i].y;
+    const double sa = a.rel_se[i] * a.xyz[i].y, sb = b.rel_se[i] * b.xyz[i].y;
+    d2 += d * d;
+    se2 += sa * sa + sb * sb;
+    const double y = 0.5 * (a.xyz[i].y + b.xyz[i].y);
+    rel2 += d * d / (2 * y * y);
+    ++n;
+  }
+  ASSERT_GT(n, 1500u);
+  const double actual = std::sqrt(rel2 / static_cast<double>(n));
+  std::cout << "actual/reported noise " << std::sqrt(d2 / se2) << ", actual rel. s.e. " << actual << "\n";
+  EXPECT_LT(std::sqrt(d2 / se2), 1.25);
+  EXPECT_LT(actual, o.rel_se);
 }
 
 TEST(Render, DeltaLobesReflectTheEnvironment) {

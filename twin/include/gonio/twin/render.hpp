@@ -100,7 +100,8 @@ struct SphereImage {
   std::vector<float> rel_se;         // s.e. of Y / max(Y, kLitFloor / exposure)
   std::vector<std::uint32_t> samples;
   NoiseReport noise;
-  double seconds = 0;
+  double seconds = 0;      // wall
+  double cpu_seconds = 0;  // the process's CPU time over the render (every thread)
 
   std::size_t index(int x, int y) const {
     return static_cast<std::size_t>(y) * static_cast<std::size_t>(size) +

@@ -28,6 +28,10 @@ struct EstimatorOptions {
   double abs_se = 1e-6;                   // ... or s.e. ≤ abs_se (β units), for dark channels
   std::uint64_t max_samples = 1ull << 22; // budget per geometry, sample + reference paths
   int replicates = 32;                    // R independent randomisations
+  // Points per replicate before the first convergence check (a power of two), doubled
+  // until the target holds. Fewer let easy geometries stop sooner; the check's reliability
+  // rests on the R replicates, not on this.
+  std::uint64_t first_points = 64;
   std::uint64_t seed = 1;
   void validate() const;
 };
