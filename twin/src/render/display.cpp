@@ -9,6 +9,7 @@
 
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/render.hpp"
+#include "render/quantile.hpp"
 
 namespace gonio::twin {
 namespace {
@@ -17,14 +18,6 @@ namespace {
 // SIGGRAPH 2002, eq. 4) on luminance, chromaticity kept: Y' = Y (1 + Y / W²) / (1 + Y),
 // with the white point W = 8 (eight times a white diffuser facing the key light).
 constexpr double kReinhardWhite = 8;
-
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  const auto k = static_cast<std::size_t>(std::min<double>(static_cast<double>(v.size()) - 1,
-                                                           std::floor(q * static_cast<double>(v.size()))));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
-}
 
 Rgb background_linear() {
   return {srgb_decode(kRenderBackground[0] / 255.0), srgb_decode(kRenderBackground[1] / 255.0),

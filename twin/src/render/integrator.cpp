@@ -30,6 +30,7 @@
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/render.hpp"
 #include "render/colour_bsdf.hpp"
+#include "render/quantile.hpp"
 #include "render/scene.hpp"
 
 namespace gonio::twin {
@@ -101,14 +102,6 @@ constexpr int kSilhouetteBatches = 4;  // sample budget of partly covered pixels
 // Points per randomised net (see RqmcNet): 1 makes the samples independent, larger nets
 // integrate smooth parts better but leave fewer nets to estimate the error from.
 constexpr int kNetPoints = 8;
-
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  const auto k = static_cast<std::size_t>(std::min<double>(static_cast<double>(v.size()) - 1,
-                                                           std::floor(q * static_cast<double>(v.size()))));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
-}
 
 }  // namespace
 
