@@ -340,6 +340,11 @@ void Instrument::loop() {
     if (!commands_.empty()) {
       auto cmd = commands_.front();
       commands_.pop_front();
+      // An earlier command may have lost a device since this one was accepted.
+      if (cmd->needs_devices && (!motion_ || !photometer_)) {
+        cmd->done.set_exception(std::make_exception_ptr(devices_down()));
+        continue;
+      }
       lock.unlock();
       try {
         cmd->done.set_value(cmd->fn());

@@ -121,9 +121,20 @@ void Instrument::validate_plan(const ScanPlan& plan) const {
 
 // ---- commands --------------------------------------------------------------------------
 
+// Under mu_.
+Error Instrument::devices_down() const {
+  const Side down = motion_ ? Side::photometer : Side::motion;
+  return Error(Errc::disconnected,
+               fmt::format("the instrument is unavailable: the {} is not connected ({}){}",
+                           down == Side::motion ? "motion controller" : "photometer",
+                           link(down).error,
+                           link(down).next_retry ? "; goniod keeps reopening it" : ""));
+}
+
 json Instrument::submit(std::function<json()> fn, bool needs_devices) {
   auto cmd = std::make_shared<Command>();
   cmd->fn = std::move(fn);
+  cmd->needs_devices = needs_devices;
   auto fut = cmd->done.get_future();
   {
     std::lock_guard lock(mu_);
@@ -131,14 +142,7 @@ json Instrument::submit(std::function<json()> fn, bool needs_devices) {
     if (running_)
       throw Error(Errc::busy,
                   fmt::format("the instrument is running scan {}; pause it first", *running_));
-    if (needs_devices && (!motion_ || !photometer_)) {
-      const Side down = motion_ ? Side::photometer : Side::motion;
-      throw Error(Errc::disconnected,
-                  fmt::format("the instrument is unavailable: the {} is not connected ({}){}",
-                              down == Side::motion ? "motion controller" : "photometer",
-                              link(down).error,
-                              link(down).next_retry ? "; goniod keeps reopening it" : ""));
-    }
+    if (needs_devices && (!motion_ || !photometer_)) throw devices_down();
     commands_.push_back(cmd);
   }
   cv_.notify_all();

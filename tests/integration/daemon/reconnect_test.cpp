@@ -111,6 +111,31 @@ TEST(Reconnect, AutoResumeFinishesTheScanOnceThePhotometerIsBack) {
   EXPECT_EQ(photometer_link(c)["reconnects"], 1);
 }
 
+// The faults that are not a lost link pause the scan and recover by resume alone: no
+// device is dropped or reopened.
+TEST(Reconnect, OtherScriptedFaultsRecoverByResumeWithoutReopeningADevice) {
+  for (const std::string fault : {"timeout_at_point = 3, timeout_wait_ms = 50", "saturate_at_point = 3",
+                                  "stall_at_move = 4", "garbage_at_point = 2"}) {
+    SCOPED_TRACE(fault);
+    TempDir dir;
+    MockOptions o;
+    o.faults = fault;
+    o.extra = fast_reconnect();
+    Goniod g(dir.path, mock_config(o));
+    auto c = g.unix_conn();
+    const auto id = submit(c, "tile", kTrueSample, json{{"grids", {"in=45;out=-30:30:10"}}});  // 7 points
+    ASSERT_EQ(wait_state(c, id, {"paused", "completed", "failed"})["state"], "paused") << g.log_text();
+    c.call("scan.resume", json{{"scan", id}});
+    EXPECT_EQ(wait_state(c, id, {"completed", "paused", "failed"})["state"], "completed") << g.log_text();
+    expect_each_index_once(all_points(c, id), 7);
+    const auto st = c.call("instrument.status");
+    for (const char* side : {"motion", "photometer"}) {
+      EXPECT_EQ(st["devices"][side]["link"], "up") << side;
+      EXPECT_EQ(st["devices"][side]["reconnects"], 0) << side;
+    }
+  }
+}
+
 // ---- a SCPI photometer on TCP whose device reboots -------------------------------------
 
 // gonio-devsim serving a SCPI photometer on TCP `port` (0: any); returns the port it bound.

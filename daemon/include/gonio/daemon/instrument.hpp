@@ -61,6 +61,7 @@
 #include "gonio/drivers/motion/collision.hpp"
 #include "gonio/drivers/motion/motion_controller.hpp"
 #include "gonio/drivers/photometer/photometer.hpp"
+#include "gonio/proto/error.hpp"
 
 namespace gonio::drivers {
 class InstrumentOpener;
@@ -113,6 +114,7 @@ class Instrument {
   struct Command {
     std::function<nlohmann::json()> fn;
     std::promise<nlohmann::json> done;
+    bool needs_devices = true;
   };
 
   enum class Side { motion, photometer };
@@ -136,6 +138,7 @@ class Instrument {
   Link& link(Side s) { return links_[static_cast<int>(s)]; }
   const Link& link(Side s) const { return links_[static_cast<int>(s)]; }
   nlohmann::json link_json(Side s) const;  // under mu_
+  Error devices_down() const;              // under mu_: which device is missing, and why
   void start_run(const Scan& scan);
   void step();                        // measures one point of the current run
   void finish_run(ScanState state, const std::string& reason, const std::string& actor);
