@@ -23,6 +23,11 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
+// The reads that check a device just opened: short, so that a device that is not there
+// (a Modbus link retrying its connection until the deadline) does not hold the runner, and
+// a shutdown, for a whole move timeout.
+constexpr std::chrono::milliseconds kOpenReadTimeout{5000};
+
 // Whether opening the devices failed on the driver tables themselves. not_found is one only
 // when it names a field (a preset) or a driver that does not exist; otherwise it is a device
 // that is not there yet (a serial node udev has not created, a photometer switched off).
@@ -93,7 +98,9 @@ void Instrument::beat() { heartbeat_ns_ = Clock::now().time_since_epoch().count(
 // ---- devices ---------------------------------------------------------------------------
 
 void Instrument::open_devices(bool at_start) {
-  for (const Side s : {Side::motion, Side::photometer}) {
+  // The photometer first: an absent one fails at once, while a motion controller's link
+  // may retry until its read times out.
+  for (const Side s : {Side::photometer, Side::motion}) {
     {
       std::lock_guard lock(mu_);
       const Link& l = link(s);
@@ -117,7 +124,7 @@ void Instrument::open_side(Side s, bool at_start) {
       std::map<Axis, double> pos;
       for (Axis a : axes) {
         beat();
-        pos[a] = m->position(a, config_.move_timeout);
+        pos[a] = m->position(a, std::min(config_.move_timeout, kOpenReadTimeout));
       }
       std::unique_ptr<drivers::MotionController> old;
       std::lock_guard lock(mu_);
@@ -131,9 +138,9 @@ void Instrument::open_side(Side s, bool at_start) {
     } else {
       auto p = opener_->open_photometer();
       beat();
-      const auto grid = p->wavelengths(config_.measure_timeout);
+      const auto grid = p->wavelengths(std::min(config_.measure_timeout, kOpenReadTimeout));
       beat();
-      const auto identity = p->identify(config_.measure_timeout).to_string();
+      const auto identity = p->identify(std::min(config_.measure_timeout, kOpenReadTimeout)).to_string();
       std::unique_ptr<drivers::Photometer> old;
       std::lock_guard lock(mu_);
       Link& l = link(s);
