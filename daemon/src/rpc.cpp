@@ -158,7 +158,7 @@ void Dispatcher::handle(std::string_view text, const std::shared_ptr<Session>& s
   }
   try {
     message = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1E400
     ++errors_;
     reply(error_response(nullptr, error_object(code::parse_error,
                                                fmt::format("parse error: {}", e.what()),
