@@ -11,3 +11,12 @@ if(GONIO_SANITIZE)
                       -fno-sanitize-recover=undefined)
   add_link_options(-fsanitize=address,undefined)
 endif()
+
+if(GONIO_FUZZ)
+  # Every library is instrumented (coverage for libFuzzer, ASan and UBSan), so that the
+  # fuzzers are guided by, and the sanitizers check, the parsers inside the libraries and
+  # not only the fuzz targets' own code. libFuzzer's main is linked into the targets only.
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer
+                      -fno-sanitize-recover=undefined)
+  add_link_options(-fsanitize=address,undefined)
+endif()

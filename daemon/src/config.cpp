@@ -369,6 +369,10 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
     c.auto_resume = r.optional<bool>("auto_resume", c.auto_resume);
     c.auto_resume_delay = seconds_in(r, "auto_resume_delay_s", c.auto_resume_delay, 0, 86400);
     c.max_auto_resumes = static_cast<int>(r.optional_in<long long>("max_auto_resumes", c.max_auto_resumes, 0, 1000));
+    c.reconnect_initial = seconds_in(r, "reconnect_initial_s", c.reconnect_initial, 0.01, 3600);
+    c.reconnect_max = seconds_in(r, "reconnect_max_s", c.reconnect_max, 0.01, 86400);
+    if (c.reconnect_max < c.reconnect_initial)
+      throw Error::invalid("instrument.reconnect_max_s", "must be at least reconnect_initial_s");
     if (const auto* lim = r.raw("limits")) {
       ObjectReader l(*lim, "instrument.limits");
       const auto pair = [&](const std::string& key, double& lo, double& hi, double min, double max) {

@@ -5,6 +5,7 @@
 #include "gonio/daemon/instrument.hpp"
 
 #include <algorithm>
+#include <utility>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -22,7 +23,10 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-constexpr auto kReopenDelay = std::chrono::seconds(5);
+// The reads that check a device just opened: short, so that a device that is not there
+// (a Modbus link retrying its connection until the deadline) does not hold the runner, and
+// a shutdown, for a whole move timeout.
+constexpr std::chrono::milliseconds kOpenReadTimeout{5000};
 
 // Whether opening the devices failed on the driver tables themselves. not_found is one only
 // when it names a field (a preset) or a driver that does not exist; otherwise it is a device
@@ -69,7 +73,7 @@ void Instrument::start() {
   }
   // A bad driver table is a configuration error: fail now, loudly. Absent devices are not:
   // the runner keeps trying.
-  open_devices();
+  open_devices(true);
   thread_ = std::thread([this] { loop(); });
 }
 
@@ -93,50 +97,151 @@ void Instrument::beat() { heartbeat_ns_ = Clock::now().time_since_epoch().count(
 
 // ---- devices ---------------------------------------------------------------------------
 
-void Instrument::open_devices() {
-  try {
-    auto inst = drivers::open_instrument(json{{"motion", config_.motion},
-                                              {"photometer", config_.photometer}},
-                                         guard_);
-    const auto axes = inst.motion->axes();
-    beat();
-    const auto grid = inst.photometer->wavelengths(config_.measure_timeout);
-    beat();
-    const auto identity = inst.photometer->identify(config_.measure_timeout).to_string();
-    std::map<Axis, double> pos;
-    for (Axis a : axes) {
-      beat();
-      pos[a] = inst.motion->position(a, config_.move_timeout);
-    }
+void Instrument::open_devices(bool at_start) {
+  // The photometer first: an absent one fails at once, while a motion controller's link
+  // may retry until its read times out.
+  for (const Side s : {Side::photometer, Side::motion}) {
     {
       std::lock_guard lock(mu_);
-      motion_ = std::move(inst.motion);
-      photometer_ = std::move(inst.photometer);
+      const Link& l = link(s);
+      if (l.up || (l.next_retry && *l.next_retry > Clock::now())) continue;
+    }
+    open_side(s, at_start);
+  }
+  settle_state();
+}
+
+void Instrument::open_side(Side s, bool at_start) {
+  const char* name = s == Side::motion ? "motion" : "photometer";
+  try {
+    if (!opener_)
+      opener_ = std::make_unique<drivers::InstrumentOpener>(
+          json{{"motion", config_.motion}, {"photometer", config_.photometer}}, guard_);
+    if (s == Side::motion) {
+      auto m = opener_->open_motion();
+      const auto axes = m->axes();
+      const bool can_home = m->capabilities().homing;
+      std::map<Axis, double> pos;
+      for (Axis a : axes) {
+        beat();
+        pos[a] = m->position(a, std::min(config_.move_timeout, kOpenReadTimeout));
+      }
+      std::unique_ptr<drivers::MotionController> old;
+      std::lock_guard lock(mu_);
+      Link& l = link(s);
+      // A controller that reconnects may have rebooted and lost its position: what it
+      // reports is not trusted for a move until each axis is homed again.
+      if (l.ever_up && can_home) unhomed_ = axes;
+      old = std::exchange(motion_, std::move(m));
       axes_ = axes;
       positions_ = pos;
+    } else {
+      auto p = opener_->open_photometer();
+      beat();
+      const auto grid = p->wavelengths(std::min(config_.measure_timeout, kOpenReadTimeout));
+      beat();
+      const auto identity = p->identify(std::min(config_.measure_timeout, kOpenReadTimeout)).to_string();
+      std::unique_ptr<drivers::Photometer> old;
+      std::lock_guard lock(mu_);
+      Link& l = link(s);
+      if (l.ever_up && (identity != photometer_identity_ || !photometer_grid_ || grid != *photometer_grid_)) {
+        // Another device on the same port: the paused scan was planned for the old one.
+        fault_latched_ = true;
+        fault_reason_ = fmt::format("the photometer that came back is not the one that went away "
+                                    "(was {}, {} nm; now {}, {} nm): check it, then resume",
+                                    photometer_identity_,
+                                    photometer_grid_ ? photometer_grid_->to_string() : "?",
+                                    identity, grid.to_string());
+        auto_resume_.reset();
+        spdlog::error("instrument: {}", fault_reason_);
+      }
+      old = std::exchange(photometer_, std::move(p));
       photometer_grid_ = grid;
       photometer_identity_ = identity;
-      open_error_.clear();
-      next_open_attempt_.reset();
     }
-    spdlog::info("instrument: motion '{}' ({} axes), photometer '{}' ({} channels, {} nm)",
-                 config_.motion.value("driver", "?"), axes.size(),
-                 config_.photometer.value("driver", "?"), grid.size(), grid.to_string());
-    settle_state();
+    bool again = false;
+    {
+      std::lock_guard lock(mu_);
+      Link& l = link(s);
+      again = l.ever_up;
+      if (again) ++l.reconnects;
+      l.up = l.ever_up = true;
+      l.failures = 0;
+      l.next_retry.reset();
+      l.wait = config_.reconnect_initial;
+    }
+    if (s == Side::motion)
+      spdlog::info("instrument: motion '{}' {} ({} axes){}", config_.motion.value("driver", "?"),
+                   again ? "reconnected" : "open", axes_.size(),
+                   again && !unhomed_.empty() ? "; home every axis before moving" : "");
+    else
+      spdlog::info("instrument: photometer '{}' {} ({}; {} channels, {} nm)",
+                   config_.photometer.value("driver", "?"), again ? "reconnected" : "open",
+                   photometer_identity_, photometer_grid_->size(), photometer_grid_->to_string());
   } catch (const Error& e) {
-    if (is_config_error(e, config_))
-      throw Error(e.code(), fmt::format("instrument.{}", e.what()),
-                  join_field("instrument", e.field()));
+    if (is_config_error(e, config_)) {
+      const Error named(e.code(), fmt::format("instrument.{}", e.what()),
+                        join_field("instrument", e.field()));
+      if (at_start) throw named;
+      spdlog::error("instrument: {}", named.what());
+    }
+    std::chrono::milliseconds wait{};
     bool changed = false;
     {
       std::lock_guard lock(mu_);
-      changed = open_error_ != e.what();
-      open_error_ = e.what();
-      next_open_attempt_ = Clock::now() + kReopenDelay;
+      Link& l = link(s);
+      changed = l.error != e.what();
+      l.up = false;
+      l.error = e.what();
+      l.errc = std::string(e.id());
+      l.error_at = utc::now();
+      ++l.failures;
+      if (l.wait.count() <= 0) l.wait = config_.reconnect_initial;
+      wait = l.wait;
+      l.next_retry = Clock::now() + wait;
+      l.wait = std::min(l.wait * 2, config_.reconnect_max);
     }
-    if (changed) spdlog::warn("instrument unavailable (retrying every 5 s): {}", e.what());
-    set_state("unavailable", e.what());
+    if (changed) spdlog::warn("instrument: {} unavailable (next attempt in {} ms): {}", name,
+                              wait.count(), e.what());
   }
+}
+
+void Instrument::drop_device(Side s, const Error& e) {
+  std::unique_ptr<drivers::MotionController> m;
+  std::unique_ptr<drivers::Photometer> p;
+  {
+    std::lock_guard lock(mu_);
+    Link& l = link(s);
+    if (!l.up) return;
+    if (s == Side::motion) m = std::move(motion_);
+    else p = std::move(photometer_);
+    l.up = false;
+    l.error = e.what();
+    l.errc = std::string(e.id());
+    l.error_at = utc::now();
+    l.failures = 0;
+    l.next_retry = Clock::now() + config_.reconnect_initial;
+    l.wait = std::min(config_.reconnect_initial * 2, config_.reconnect_max);
+  }
+  spdlog::warn("instrument: {} link lost ({}); reopening in {} ms",
+               s == Side::motion ? "motion" : "photometer", e.what(),
+               config_.reconnect_initial.count());
+  // The old handles are closed here, outside the lock.
+}
+
+json Instrument::link_json(Side s) const {
+  const Link& l = link(s);
+  json next = nullptr;
+  if (!l.up && l.next_retry)
+    next = std::max(0.0, std::chrono::duration<double>(*l.next_retry - Clock::now()).count());
+  return json{{"driver", (s == Side::motion ? config_.motion : config_.photometer).value("driver", "")},
+              {"link", l.up ? "up" : "down"},
+              {"last_error", l.error},
+              {"last_errc", l.errc},
+              {"last_error_at", l.error_at.empty() ? json(nullptr) : json(l.error_at)},
+              {"next_retry_s", next},
+              {"failed_attempts", l.failures},
+              {"reconnects", l.reconnects}};
 }
 
 void Instrument::set_state(std::string state, std::string detail) {
@@ -154,7 +259,14 @@ void Instrument::settle_state(std::string detail) {
   {
     std::lock_guard lock(mu_);
     state = fault_latched_ ? "fault" : "idle";
-    if (fault_latched_) detail = fault_reason_;
+    if (fault_latched_) {
+      detail = fault_reason_;
+    } else if (!motion_ || !photometer_) {
+      state = "unavailable";
+      detail = link(motion_ ? Side::photometer : Side::motion).error;
+    } else if (!unhomed_.empty() && detail.empty()) {
+      detail = "the motion controller reconnected: home every axis before moving";
+    }
   }
   set_state(std::move(state), std::move(detail));
 }
@@ -178,7 +290,14 @@ json Instrument::status() const {
       {"fault_latched", fault_latched_},
       {"fault_reason", fault_reason_},
       {"available", motion_ != nullptr && photometer_ != nullptr},
-      {"error", open_error_},
+      {"error", !link(Side::motion).up ? link(Side::motion).error
+                : !link(Side::photometer).up ? link(Side::photometer).error : std::string()},
+      {"devices", {{"motion", link_json(Side::motion)}, {"photometer", link_json(Side::photometer)}}},
+      {"axes_to_home", [&] {
+         json a = json::array();
+         for (Axis x : unhomed_) a.push_back(to_text(x));
+         return a;
+       }()},
       {"positions", positions_json()},
       {"axes", std::move(axes)},
       {"motion_driver", config_.motion.value("driver", "")},
@@ -229,6 +348,11 @@ void Instrument::loop() {
     if (!commands_.empty()) {
       auto cmd = commands_.front();
       commands_.pop_front();
+      // An earlier command may have lost a device since this one was accepted.
+      if (cmd->needs_devices && (!motion_ || !photometer_)) {
+        cmd->done.set_exception(std::make_exception_ptr(devices_down()));
+        continue;
+      }
       lock.unlock();
       try {
         cmd->done.set_value(cmd->fn());
@@ -238,15 +362,18 @@ void Instrument::loop() {
       continue;
     }
     if (!motion_ || !photometer_) {
-      const auto at = next_open_attempt_.value_or(Clock::now());
+      // No run is in progress: a device is dropped only after its fault paused the run.
+      std::optional<Clock::time_point> due;
+      for (const Side s : {Side::motion, Side::photometer})
+        if (const auto& l = link(s); !l.up && l.next_retry)
+          due = due ? std::min(*due, *l.next_retry) : *l.next_retry;
+      const auto at = due.value_or(Clock::now());
       if (Clock::now() >= at) {
         lock.unlock();
         try {
           open_devices();
-        } catch (const Error& e) {
+        } catch (const std::exception& e) {
           spdlog::error("instrument: {}", e.what());
-          std::lock_guard l2(mu_);
-          next_open_attempt_ = Clock::now() + kReopenDelay;
         }
         continue;
       }
@@ -296,7 +423,7 @@ void Instrument::loop() {
     }
     auto wait_until = Clock::now() + std::chrono::seconds(1);
     if (auto_resume_) wait_until = std::min(wait_until, auto_resume_->second);
-    if (!fault_latched_) {
+    if (!fault_latched_ && unhomed_.empty()) {
       lock.unlock();
       std::optional<Scan> next;
       {

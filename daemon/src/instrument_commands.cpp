@@ -10,6 +10,7 @@
 #include "gonio/daemon/instrument.hpp"
 #include "gonio/daemon/plan_check.hpp"
 #include "gonio/proto/error.hpp"
+#include "instrument_run.hpp"
 
 namespace gonio::daemon {
 
@@ -120,9 +121,20 @@ void Instrument::validate_plan(const ScanPlan& plan) const {
 
 // ---- commands --------------------------------------------------------------------------
 
-json Instrument::submit(std::function<json()> fn) {
+// Under mu_.
+Error Instrument::devices_down() const {
+  const Side down = motion_ ? Side::photometer : Side::motion;
+  return Error(Errc::disconnected,
+               fmt::format("the instrument is unavailable: the {} is not connected ({}){}",
+                           down == Side::motion ? "motion controller" : "photometer",
+                           link(down).error,
+                           link(down).next_retry ? "; goniod keeps reopening it" : ""));
+}
+
+json Instrument::submit(std::function<json()> fn, bool needs_devices) {
   auto cmd = std::make_shared<Command>();
   cmd->fn = std::move(fn);
+  cmd->needs_devices = needs_devices;
   auto fut = cmd->done.get_future();
   {
     std::lock_guard lock(mu_);
@@ -130,8 +142,7 @@ json Instrument::submit(std::function<json()> fn) {
     if (running_)
       throw Error(Errc::busy,
                   fmt::format("the instrument is running scan {}; pause it first", *running_));
-    if (!motion_ || !photometer_)
-      throw Error(Errc::disconnected, fmt::format("the instrument is unavailable: {}", open_error_));
+    if (needs_devices && (!motion_ || !photometer_)) throw devices_down();
     commands_.push_back(cmd);
   }
   cv_.notify_all();
@@ -158,8 +169,10 @@ json Instrument::home(std::vector<Axis> axes, const std::string& actor) {
         const double pos = motion_->position(a, config_.move_timeout);
         std::lock_guard lock(mu_);
         positions_[a] = pos;
+        std::erase(unhomed_, a);
       }
     } catch (const Error& e) {
+      if (is_link_error(e.code())) drop_device(Side::motion, e);
       settle_state(e.what());
       throw;
     }
@@ -183,6 +196,17 @@ json Instrument::move(const std::map<Axis, double>& targets, const std::string& 
     }
     const auto ti = targets.contains(Axis::incidence) ? targets.at(Axis::incidence) : i;
     const auto tr = targets.contains(Axis::receive) ? targets.at(Axis::receive) : r;
+    {
+      std::lock_guard lock(mu_);
+      if (!unhomed_.empty()) {
+        std::string names;
+        for (Axis a : unhomed_) names += (names.empty() ? "" : ", ") + std::string(to_text(a));
+        throw Error::wrong_state("instrument",
+                                 fmt::format("the motion controller reconnected and may have lost "
+                                             "its position: home {} first (instrument.home)",
+                                             names));
+      }
+    }
     set_state("moving");
     try {
       if (targets.contains(Axis::incidence) || targets.contains(Axis::receive))
@@ -195,6 +219,7 @@ json Instrument::move(const std::map<Axis, double>& targets, const std::string& 
         positions_[axis] = deg;
       }
     } catch (const Error& e) {
+      if (is_link_error(e.code())) drop_device(Side::motion, e);
       settle_state(e.what());
       throw;
     }
@@ -203,35 +228,51 @@ json Instrument::move(const std::map<Axis, double>& targets, const std::string& 
   });
 }
 
+// Also with a device down: the technician has replugged it, so every device that is down is
+// tried again at once, the back-off starting over.
 json Instrument::reset(const std::string& actor) {
   return submit([this, actor] {
     store_.audit(actor, "instrument.reset", "", json::object());
     std::vector<Axis> axes;
+    bool have_motion = false;
     {
       std::lock_guard lock(mu_);
       axes = axes_;
+      have_motion = motion_ != nullptr;
     }
-    if (motion_->capabilities().alarm_reset)
-      for (Axis a : axes) {
-        beat();
-        motion_->reset_alarm(a, config_.move_timeout);
-      }
+    try {
+      if (have_motion && motion_->capabilities().alarm_reset)
+        for (Axis a : axes) {
+          beat();
+          motion_->reset_alarm(a, config_.move_timeout);
+        }
+    } catch (const Error& e) {
+      if (is_link_error(e.code())) drop_device(Side::motion, e);
+      throw;
+    }
     {
       std::lock_guard lock(mu_);
       fault_latched_ = false;
       fault_reason_.clear();
+      for (Link& l : links_)
+        if (!l.up) {
+          l.next_retry = std::chrono::steady_clock::now();
+          l.wait = config_.reconnect_initial;
+        }
     }
-    set_state("idle");
+    open_devices();
     cv_.notify_all();
     return status();
-  });
+  }, false);
 }
 
 json Instrument::stop(const std::string& actor) {
   std::optional<std::int64_t> scan;
   {
     std::lock_guard lock(mu_);
-    if (!motion_) throw Error(Errc::disconnected, fmt::format("the instrument is unavailable: {}", open_error_));
+    if (!motion_)
+      throw Error(Errc::disconnected, fmt::format("the motion controller is not connected: {}",
+                                                  link(Side::motion).error));
     motion_->stop(std::chrono::milliseconds(2000));
     if (running_) {
       scan = running_;

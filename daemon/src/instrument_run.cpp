@@ -32,7 +32,8 @@ bool is_device_error(Errc c) {
     case Errc::saturated:
     case Errc::busy:
     case Errc::limit_violation:
-    case Errc::unsupported: return true;
+    case Errc::unsupported:
+    case Errc::io_error: return true;
     default: return false;
   }
 }
@@ -236,6 +237,7 @@ void Instrument::step() {
     std::lock_guard lock(mu_);
     has_rotation = std::find(axes_.begin(), axes_.end(), Axis::rotation) != axes_.end();
   }
+  Side side = Side::motion;  // whose call failed
   try {
     std::optional<double> rotation;
     if (has_rotation) rotation = g.phi_i;
@@ -246,6 +248,7 @@ void Instrument::step() {
         std::this_thread::sleep_for(config_.settle);
       }
     });
+    side = Side::photometer;
     timed([&] { dark = photometer_->measure(Channel::dark, config_.measure_timeout); });
     read_reference = !r.reference || plan.reads_reference(r.since_start);
     if (read_reference) {
@@ -255,6 +258,7 @@ void Instrument::step() {
       r.reference_dark = dark;
     }
     timed([&] { sample = photometer_->measure(Channel::sample, config_.measure_timeout); });
+    side = Side::motion;
     timed([&] { p.actual.theta_i = motion_->position(Axis::incidence, config_.move_timeout); });
     timed([&] { p.actual.theta_r = motion_->position(Axis::receive, config_.move_timeout); });
     if (has_rotation)
@@ -266,6 +270,8 @@ void Instrument::step() {
       stop_requested = control_ == Control::pause;
     }
     if (e.code() == Errc::invalid_state && stop_requested) return;  // loop applies the pause
+    // The fault pauses the scan (below); a lost link also closes the device for reopening.
+    if (is_link_error(e.code())) drop_device(side, e);
     if (is_device_error(e.code()) || e.code() == Errc::invalid_state) {
       on_device_fault(e);
       return;

@@ -12,8 +12,13 @@
 #include "gonio/daemon/instrument.hpp"
 #include "gonio/daemon/point_reduction.hpp"
 #include "gonio/drivers/photometer/photometer.hpp"
+#include "gonio/proto/error.hpp"
 
 namespace gonio::daemon {
+
+// A failure of a device's link rather than of one request: the device is closed and opened
+// again (Instrument::drop_device).
+inline bool is_link_error(Errc c) { return c == Errc::disconnected || c == Errc::io_error; }
 
 struct Instrument::Run {
   Scan scan;

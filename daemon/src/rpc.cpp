@@ -6,6 +6,10 @@
 
 namespace gonio::daemon::rpc {
 
+// A reply must always serialise: text that is not UTF-8 (a parse error quoting the bytes it
+// choked on, a device message) is written with U+FFFD rather than throwing mid-reply.
+constexpr auto kInvalidUtf8 = nlohmann::json::error_handler_t::replace;
+
 using nlohmann::json;
 
 namespace {
@@ -79,20 +83,20 @@ json response(const json& id, json result) {
 
 std::string response_text(const json& id, Result result) {
   // Spliced rather than built as one more JSON object around the result.
-  std::string body = std::holds_alternative<json>(result) ? std::get<json>(result).dump()
+  std::string body = std::holds_alternative<json>(result) ? std::get<json>(result).dump(-1, ' ', false, kInvalidUtf8)
                                                            : std::move(std::get<RawJson>(result).text);
   std::string out;
   out.reserve(body.size() + 48);
   out += R"({"jsonrpc":"2.0","result":)";
   out += body;
   out += R"(,"id":)";
-  out += id.dump();
+  out += id.dump(-1, ' ', false, kInvalidUtf8);
   out += '}';
   return out;
 }
 
 std::string notification(std::string_view method, const json& params) {
-  return json{{"jsonrpc", "2.0"}, {"method", method}, {"params", params}}.dump();
+  return json{{"jsonrpc", "2.0"}, {"method", method}, {"params", params}}.dump(-1, ' ', false, kInvalidUtf8);
 }
 
 // ---- sessions ----------------------------------------------------------------------------
@@ -149,17 +153,17 @@ void Dispatcher::handle(std::string_view text, const std::shared_ptr<Session>& s
                                                fmt::format("message nests deeper than {} levels",
                                                            kMaxDepth),
                                                Errc::invalid_argument))
-              .dump());
+              .dump(-1, ' ', false, kInvalidUtf8));
     return;
   }
   try {
     message = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1E400
     ++errors_;
     reply(error_response(nullptr, error_object(code::parse_error,
                                                fmt::format("parse error: {}", e.what()),
                                                Errc::parse_error))
-              .dump());
+              .dump(-1, ' ', false, kInvalidUtf8));
     return;
   }
   if (message.is_array()) {
@@ -167,7 +171,7 @@ void Dispatcher::handle(std::string_view text, const std::shared_ptr<Session>& s
       ++errors_;
       reply(error_response(nullptr, error_object(code::invalid_request, "empty batch",
                                                  Errc::invalid_argument))
-                .dump());
+                .dump(-1, ' ', false, kInvalidUtf8));
       return;
     }
     auto pending = std::make_shared<Pending>();
@@ -201,7 +205,7 @@ void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
   ++requests_;
   const auto fail = [&](const json& id, json error) {
     ++errors_;
-    done(error_response(id, std::move(error)).dump());
+    done(error_response(id, std::move(error)).dump(-1, ' ', false, kInvalidUtf8));
   };
   if (!req.is_object()) {
     fail(nullptr, error_object(code::invalid_request, "a request must be a JSON object",
@@ -272,7 +276,7 @@ void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
       done(std::nullopt);
       return;
     }
-    done(error ? error_response(id, std::move(*error)).dump() : response_text(id, std::move(*result)));
+    done(error ? error_response(id, std::move(*error)).dump(-1, ' ', false, kInvalidUtf8) : response_text(id, std::move(*result)));
   };
   const auto it = methods_.find(name);
   if (it == methods_.end()) {

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <utility>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -143,6 +144,8 @@ ScpiSimConfig ScpiSimConfig::from_json(const nlohmann::json& j) {
   num("full_scale_counts", c.full_scale_counts, 1, 1e15);
   num("pm100_watts", c.pm100_watts, 0, 1e3);
   c.seed = r.optional<std::uint64_t>("seed", c.seed);
+  c.late_reply_at = r.optional_in("late_reply_at", c.late_reply_at, 0, 1000000000);
+  num("late_reply_ms", c.late_reply_ms, 0, 600000);
   if (r.has("geometry")) c.geometry = Geometry::parse(r.required<std::string>("geometry"));
   c.geometry.validate(r.path("geometry"));
   r.finish();
@@ -151,6 +154,11 @@ ScpiSimConfig ScpiSimConfig::from_json(const nlohmann::json& j) {
 
 ScpiSimDevice::ScpiSimDevice(ScpiSimConfig config, BetaSource beta)
     : cfg_(std::move(config)), beta_(std::move(beta)), rng_(cfg_.seed) {}
+
+std::chrono::milliseconds ScpiSimDevice::take_reply_delay() {
+  std::lock_guard lock(mu_);
+  return std::exchange(reply_delay_, std::chrono::milliseconds(0));
+}
 
 std::size_t ScpiSimDevice::commands_handled() const {
   std::lock_guard lock(mu_);
@@ -275,7 +283,10 @@ std::string ScpiSimDevice::execute(std::string_view command) {
       cfg_.integration_ms = ms;
       return {};
     }
-    if (matches("MEASure:SPECtrum?", header)) return measure_spectrum(arg);
+    if (matches("MEASure:SPECtrum?", header)) {
+      count_measurement();
+      return measure_spectrum(arg);
+    }
   } else {
     if (matches("[SENSe]:CORRection:WAVelength", header)) {
       const auto nm = number(arg);
@@ -292,7 +303,10 @@ std::string ScpiSimDevice::execute(std::string_view command) {
       pm_averages_ = static_cast<int>(*n);
       return {};
     }
-    if (matches("MEASure[:SCALar]:POWer?", header)) return measure_power();
+    if (matches("MEASure[:SCALar]:POWer?", header)) {
+      count_measurement();
+      return measure_power();
+    }
   }
   throw ScpiError{-113, "Undefined header"};
 }
@@ -335,6 +349,11 @@ std::string ScpiSimDevice::measure_spectrum(std::string_view arg) {
   for (const double v : val) out += "," + fmt_num(v);
   for (const double u : unc) out += "," + fmt_num(u);
   return out;
+}
+
+void ScpiSimDevice::count_measurement() {
+  if (++measurements_ == cfg_.late_reply_at)
+    reply_delay_ = std::chrono::milliseconds(static_cast<long long>(cfg_.late_reply_ms));
 }
 
 std::string ScpiSimDevice::measure_power() {

@@ -3,6 +3,9 @@
 // poll() loop on a background thread, one line buffer per client, NL-terminated replies.
 #include <cerrno>
 #include <cstring>
+#include <algorithm>
+#include <chrono>
+#include <deque>
 #include <map>
 
 #include <fcntl.h>
@@ -102,19 +105,34 @@ void ScpiSimServer::stop() {
 }
 
 void ScpiSimServer::run() {
+  using Clock = std::chrono::steady_clock;
   std::map<int, std::string> clients;  // fd -> partial line; the pty master is a client too
+  // Replies not yet due, per client, in order: a late reply holds back the ones after it.
+  std::map<int, std::deque<std::pair<Clock::time_point, std::string>>> outbox;
   if (pty_master_ >= 0) clients[pty_master_];
   for (;;) {
+    std::vector<int> closed;
+    auto next_due = Clock::time_point::max();
+    for (auto& [fd, q] : outbox) {
+      while (!q.empty() && q.front().first <= Clock::now()) {
+        if (!write_all(fd, q.front().second) && fd != pty_master_) closed.push_back(fd);
+        q.pop_front();
+      }
+      if (!q.empty()) next_due = std::min(next_due, q.front().first);
+    }
+    int timeout_ms = -1;
+    if (next_due != Clock::time_point::max())
+      timeout_ms = static_cast<int>(std::max<long long>(
+          1, std::chrono::duration_cast<std::chrono::milliseconds>(next_due - Clock::now()).count() + 1));
     std::vector<pollfd> fds{{stop_fd_, POLLIN, 0}};
     if (listen_fd_ >= 0) fds.push_back({listen_fd_, POLLIN, 0});
     for (const auto& [fd, buf] : clients) fds.push_back({fd, POLLIN, 0});
-    if (::poll(fds.data(), fds.size(), -1) < 0) {
+    if (::poll(fds.data(), fds.size(), timeout_ms) < 0) {
       if (errno == EINTR) continue;
       spdlog::error("scpi simulator: poll: {}", std::strerror(errno));
       return;
     }
     if (fds[0].revents) break;
-    std::vector<int> closed;
     for (std::size_t i = 1; i < fds.size(); ++i) {
       if (!fds[i].revents) continue;
       const int fd = fds[i].fd;
@@ -137,13 +155,21 @@ void ScpiSimServer::run() {
         buf.erase(0, nl + 1);
         if (!line.empty() && line.back() == '\r') line.pop_back();
         const auto reply = device_.handle(line);
-        if (!reply.empty() && !write_all(fd, reply + "\n") && fd != pty_master_) closed.push_back(fd);
+        const auto delay = device_.take_reply_delay();
+        if (reply.empty()) continue;
+        auto& q = outbox[fd];
+        auto due = Clock::now() + delay;
+        if (!q.empty()) due = std::max(due, q.back().first);
+        if (delay.count() > 0) spdlog::debug("scpi simulator: answering '{}' {} ms late", line, delay.count());
+        q.emplace_back(due, reply + "\n");
       }
       if (buf.size() > kMaxLine) buf.clear();  // a client that never ends its line
     }
     for (const int fd : closed) {
+      if (!clients.contains(fd)) continue;
       ::close(fd);
       clients.erase(fd);
+      outbox.erase(fd);
     }
   }
   for (const auto& [fd, buf] : clients)

@@ -26,6 +26,7 @@ struct Faults {
   int disconnect_at_point = 0, timeout_at_point = 0, garbage_at_point = 0, saturate_at_point = 0;
   int stall_at_move = 0;
   milliseconds timeout_wait{200};
+  milliseconds reconnect_after{0};  // how long the photometer stays unplugged
 };
 
 struct LabConfig {
@@ -90,6 +91,7 @@ LabConfig read_config(const nlohmann::json& j) {
     c.faults.saturate_at_point = fault_index(fr, "saturate_at_point");
     c.faults.stall_at_move = fault_index(fr, "stall_at_move");
     c.faults.timeout_wait = milliseconds(static_cast<long long>(fr.optional_in<double>("timeout_wait_ms", 200, 0, 600000)));
+    c.faults.reconnect_after = milliseconds(static_cast<long long>(fr.optional_in<double>("reconnect_after_ms", 0, 0, 86400000)));
     fr.finish();
   }
   r.finish();
@@ -135,14 +137,32 @@ class Lab {
 
   const LabConfig& config() const { return cfg_; }
 
-  void check_link() const {
-    if (disconnected_) throw Error(Errc::disconnected, "mock instrument: link lost (scripted fault)");
+  // The photometer's link: a handle opened at `epoch` works while the link is up and has
+  // not been lost since (a replug gives a new device node; the old handle stays dead).
+  void check_link(std::uint64_t epoch) const {
+    std::lock_guard lock(mu_);
+    check_link_locked(epoch);
+  }
+
+  // A new photometer handle, as the driver would open after a replug: refused while the
+  // photometer is still unplugged (reconnect_after_ms after the loss).
+  std::uint64_t connect_photometer() {
+    std::lock_guard lock(mu_);
+    if (disconnected_) {
+      const auto back = lost_at_ + cfg_.faults.reconnect_after;
+      if (Clock::now() < back)
+        throw Error(Errc::disconnected,
+                    fmt::format("mock photometer: still unplugged (back {} ms after the loss)",
+                                cfg_.faults.reconnect_after.count()));
+      disconnected_ = false;
+      spdlog::info("mock photometer: plugged in again");
+    }
+    return epoch_;
   }
 
   // ---- motion ----
   void move(Axis a, double target, milliseconds timeout) {
     std::unique_lock lock(mu_);
-    check_link();
     stop_ = false;
     const double from = pos_[axis_index(a)];
     ++moves_;
@@ -174,13 +194,11 @@ class Lab {
 
   double position(Axis a) {
     std::lock_guard lock(mu_);
-    check_link();
     return pos_[axis_index(a)];
   }
 
   AxisStatus status(Axis a) {
     std::lock_guard lock(mu_);
-    check_link();
     AxisStatus s;
     s.alarm_code = alarm_[axis_index(a)];
     s.alarm = s.alarm_code != 0;
@@ -199,7 +217,6 @@ class Lab {
 
   void reset_alarm(Axis a) {
     std::lock_guard lock(mu_);
-    check_link();
     alarm_[axis_index(a)] = 0;
   }
 
@@ -209,15 +226,17 @@ class Lab {
   }
 
   // ---- photometer ----
-  Reading measure(Channel ch, milliseconds timeout) {
+  Reading measure(Channel ch, milliseconds timeout, std::uint64_t epoch) {
     std::unique_lock lock(mu_);
-    check_link();
+    check_link_locked(epoch);
     int point = 0;
     if (ch == Channel::sample) point = ++points_;
     const auto& f = cfg_.faults;
-    if (point != 0 && point == f.disconnect_at_point) {
+    if (point != 0 && point == f.disconnect_at_point) {  // unplugged: this handle dies
       disconnected_ = true;
-      check_link();
+      ++epoch_;
+      lost_at_ = Clock::now();
+      check_link_locked(epoch);
     }
     if (point != 0 && point == f.timeout_at_point) {
       lock.unlock();
@@ -264,14 +283,14 @@ class Lab {
     return r;
   }
 
-  double integration_ms() {
+  double integration_ms(std::uint64_t epoch) {
     std::lock_guard lock(mu_);
-    check_link();
+    check_link_locked(epoch);
     return integration_ms_;
   }
-  void set_integration_ms(double ms) {
+  void set_integration_ms(double ms, std::uint64_t epoch) {
     std::lock_guard lock(mu_);
-    check_link();
+    check_link_locked(epoch);
     if (!(ms >= 0.01 && ms <= 60000)) throw Error::out_of_range("integration_ms", ms, 0.01, 60000, " ms");
     integration_ms_ = ms;
   }
@@ -299,6 +318,13 @@ class Lab {
   }
 
  private:
+  using Clock = std::chrono::steady_clock;
+
+  void check_link_locked(std::uint64_t epoch) const {
+    if (disconnected_ || epoch != epoch_)
+      throw Error(Errc::disconnected, "mock photometer: link lost (scripted fault: unplugged)");
+  }
+
   void sleep_interruptible(milliseconds d) {
     std::unique_lock lock(sleep_mu_);
     cv_.wait_for(lock, d, [&] { return stop_.load(); });
@@ -319,6 +345,8 @@ class Lab {
   double integration_ms_ = 100;
   int moves_ = 0, points_ = 0;
   bool disconnected_ = false;
+  std::uint64_t epoch_ = 0;  // photometer link generation: + 1 at every loss
+  Clock::time_point lost_at_{};
 };
 
 namespace {
@@ -342,20 +370,21 @@ class MockMotion final : public MotionController {
 
 class MockPhotometer final : public Photometer {
  public:
-  explicit MockPhotometer(std::shared_ptr<Lab> lab) : lab_(std::move(lab)) {}
+  explicit MockPhotometer(std::shared_ptr<Lab> lab)
+      : lab_(std::move(lab)), epoch_(lab_->connect_photometer()) {}
   PhotometerCapabilities capabilities() const override { return {true, true, true, true}; }
   Identity identify(milliseconds) override {
-    lab_->check_link();
+    lab_->check_link(epoch_);
     return {"GONIO", "MOCK", fmt::format("seed-{}", lab_->config().seed), "1.0"};
   }
   WavelengthGrid wavelengths(milliseconds) override {
-    lab_->check_link();
+    lab_->check_link(epoch_);
     return lab_->config().grid;
   }
-  double integration_ms(milliseconds) override { return lab_->integration_ms(); }
-  void set_integration_ms(double ms, milliseconds) override { lab_->set_integration_ms(ms); }
+  double integration_ms(milliseconds) override { return lab_->integration_ms(epoch_); }
+  void set_integration_ms(double ms, milliseconds) override { lab_->set_integration_ms(ms, epoch_); }
   Reading measure(Channel ch, milliseconds timeout, SaturationPolicy policy) override {
-    auto r = lab_->measure(ch, timeout);
+    auto r = lab_->measure(ch, timeout, epoch_);
     check_saturation(r, policy);
     return r;
   }
@@ -363,6 +392,7 @@ class MockPhotometer final : public Photometer {
 
  private:
   std::shared_ptr<Lab> lab_;
+  std::uint64_t epoch_;
 };
 
 }  // namespace
@@ -370,6 +400,14 @@ class MockPhotometer final : public Photometer {
 MockInstrument make_mock(const nlohmann::json& config) {
   auto lab = std::make_shared<Lab>(read_config(config));
   return {std::make_unique<MockMotion>(lab), std::make_unique<MockPhotometer>(lab), lab};
+}
+
+std::unique_ptr<MotionController> connect_motion(const std::shared_ptr<Lab>& lab) {
+  return std::make_unique<MockMotion>(lab);
+}
+
+std::unique_ptr<Photometer> connect_photometer(const std::shared_ptr<Lab>& lab) {
+  return std::make_unique<MockPhotometer>(lab);
 }
 
 std::unique_ptr<MotionController> make_mock_motion(const nlohmann::json& config) {

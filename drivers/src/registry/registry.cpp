@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <tuple>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -152,42 +153,58 @@ Instrument open_instrument(const nlohmann::json& config, const MotionLimits& lim
   return open_instrument(config, motion_guard(limits, *m));
 }
 
-Instrument open_instrument(const nlohmann::json& config, const MotionGuard& guard) {
+InstrumentOpener::InstrumentOpener(const nlohmann::json& config, const MotionGuard& guard)
+    : guard_(guard) {
   json_util::ObjectReader r(config, "");
   const auto* m = r.raw("motion");
   const auto* p = r.raw("photometer");
   r.finish();
   if (m == nullptr) throw Error::invalid("motion", "is required");
   if (p == nullptr) throw Error::invalid("photometer", "is required");
-  // Plain variables, not structured bindings: lambdas below capture them (C++20 allows
-  // capturing bindings only from clang 16).
-  auto motion_split = split(*m, "motion");
-  auto photometer_split = split(*p, "photometer");
-  const std::string mname = std::move(motion_split.first);
-  const nlohmann::json mcfg = std::move(motion_split.second);
-  const std::string pname = std::move(photometer_split.first);
-  const nlohmann::json pcfg = std::move(photometer_split.second);
-  const auto wrap = [](const std::string& prefix, auto&& f) { return prefixed(prefix, f); };
-  const auto guarded = [&](std::unique_ptr<MotionController> motion) {
-    return std::make_unique<GuardedMotion>(std::move(motion), guard);
-  };
-  Instrument out;
-  if (mname == "mock" && pname == "mock") {
-    if (!pcfg.empty())
+  std::tie(motion_driver_, motion_config_) = split(*m, "motion");
+  std::tie(photometer_driver_, photometer_config_) = split(*p, "photometer");
+  if (motion_driver_ == "mock" && photometer_driver_ == "mock") {
+    if (!photometer_config_.empty())
       throw Error::invalid("photometer", "a mock photometer shares the motion side's lab: "
                                          "configure it under \"motion\"");
-    auto lab = wrap("motion", [&] { return mock::make_mock(mcfg); });
-    out.motion = guarded(std::move(lab.motion));
-    out.photometer = std::move(lab.photometer);
-    return out;
+    return;
   }
-  const auto& md = find_driver(mname);
-  const auto& pd = find_driver(pname);
-  if (!md.make_motion) throw Error::invalid("motion.driver", fmt::format("'{}' has no motion side", mname));
+  const auto& md = find_driver(motion_driver_);
+  const auto& pd = find_driver(photometer_driver_);
+  if (!md.make_motion)
+    throw Error::invalid("motion.driver", fmt::format("'{}' has no motion side", motion_driver_));
   if (!pd.make_photometer)
-    throw Error::invalid("photometer.driver", fmt::format("'{}' has no photometer side", pname));
-  out.motion = guarded(wrap("motion", [&] { return md.make_motion(mcfg); }));
-  out.photometer = wrap("photometer", [&] { return pd.make_photometer(pcfg); });
+    throw Error::invalid("photometer.driver",
+                         fmt::format("'{}' has no photometer side", photometer_driver_));
+}
+
+InstrumentOpener::~InstrumentOpener() = default;
+
+std::shared_ptr<mock::Lab> InstrumentOpener::lab() {
+  if (!lab_) lab_ = prefixed("motion", [&] { return mock::make_mock(motion_config_).lab; });
+  return lab_;
+}
+
+std::unique_ptr<GuardedMotion> InstrumentOpener::open_motion() {
+  std::unique_ptr<MotionController> m;
+  if (motion_driver_ == "mock" && photometer_driver_ == "mock")
+    m = mock::connect_motion(lab());
+  else
+    m = prefixed("motion", [&] { return find_driver(motion_driver_).make_motion(motion_config_); });
+  return std::make_unique<GuardedMotion>(std::move(m), guard_);
+}
+
+std::unique_ptr<Photometer> InstrumentOpener::open_photometer() {
+  if (motion_driver_ == "mock" && photometer_driver_ == "mock") return mock::connect_photometer(lab());
+  return prefixed("photometer",
+                  [&] { return find_driver(photometer_driver_).make_photometer(photometer_config_); });
+}
+
+Instrument open_instrument(const nlohmann::json& config, const MotionGuard& guard) {
+  InstrumentOpener opener(config, guard);
+  Instrument out;
+  out.motion = opener.open_motion();
+  out.photometer = opener.open_photometer();
   return out;
 }
 

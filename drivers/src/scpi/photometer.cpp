@@ -4,6 +4,7 @@
 // one wavelength at a time, `repeats` readings per wavelength for mean and standard error).
 #include <cmath>
 #include <mutex>
+#include <type_traits>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -45,10 +46,45 @@ class ScpiPhotometer final : public Photometer {
   }
 
   Identity identify(milliseconds timeout) override {
-    return parse_identity(session_.query("*IDN?", deadline_after(timeout)));
+    return in_step([&] { return parse_identity(session_.query("*IDN?", deadline_after(timeout))); });
   }
 
   WavelengthGrid wavelengths(milliseconds timeout) override {
+    return in_step([&] { return read_wavelengths(timeout); });
+  }
+
+  double integration_ms(milliseconds timeout) override {
+    return in_step([&] { return read_integration_ms(timeout); });
+  }
+
+  void set_integration_ms(double ms, milliseconds timeout) override {
+    in_step([&] { write_integration_ms(ms, timeout); });
+  }
+
+  Reading measure(Channel ch, milliseconds timeout, SaturationPolicy policy) override {
+    const auto d = deadline_after(timeout);
+    Reading r = in_step(
+        [&] { return cfg_.preset == Preset::gonio ? measure_gonio(ch, d) : measure_pm100(ch, d); });
+    check_saturation(r, policy);
+    return r;
+  }
+
+  void cancel() noexcept override { session_.cancel(); }
+
+ private:
+  // A reply that breaks the protocol may have been a late reply to an earlier query, and
+  // then this query's reply is still coming: the session resynchronises before the next.
+  template <typename F>
+  std::invoke_result_t<F> in_step(F&& f) {
+    try {
+      return f();
+    } catch (const Error& e) {
+      if (e.code() == Errc::protocol_error) session_.mark_out_of_step();
+      throw;
+    }
+  }
+
+  WavelengthGrid read_wavelengths(milliseconds timeout) {
     if (cfg_.wavelengths) return *cfg_.wavelengths;
     const auto d = deadline_after(timeout);
     const auto nm = parse_numbers(session_.query("SENS:WAV:DATA?", d), "wavelength list",
@@ -61,13 +97,13 @@ class ScpiPhotometer final : public Photometer {
     return *cfg_.wavelengths;
   }
 
-  double integration_ms(milliseconds timeout) override {
+  double read_integration_ms(milliseconds timeout) {
     if (cfg_.preset == Preset::pm100) return 0;
     return 1000 * parse_number(session_.query("SENS:INT:TIME?", deadline_after(timeout)),
                                "integration time");
   }
 
-  void set_integration_ms(double ms, milliseconds timeout) override {
+  void write_integration_ms(double ms, milliseconds timeout) {
     if (cfg_.preset == Preset::pm100)
       throw Error(Errc::unsupported, "the pm100 preset has no settable integration time");
     const auto d = deadline_after(timeout);
@@ -83,18 +119,8 @@ class ScpiPhotometer final : public Photometer {
     if (cfg_.check_errors) session_.check_errors(cmd, d);
   }
 
-  Reading measure(Channel ch, milliseconds timeout, SaturationPolicy policy) override {
-    const auto d = deadline_after(timeout);
-    Reading r = cfg_.preset == Preset::gonio ? measure_gonio(ch, d) : measure_pm100(ch, d);
-    check_saturation(r, policy);
-    return r;
-  }
-
-  void cancel() noexcept override { session_.cancel(); }
-
- private:
   Reading measure_gonio(Channel ch, Deadline d) {
-    const auto grid = wavelengths(remaining(d));
+    const auto grid = read_wavelengths(remaining(d));
     const auto n = grid.size();
     const auto v = parse_numbers(session_.query(fmt::format("MEAS:SPEC? {}", channel_keyword(ch)), d),
                                  "spectrum reply", 3 + 2 * WavelengthGrid::kMaxChannels);

@@ -103,7 +103,10 @@ ErrorEntry parse_error_entry(std::string_view reply) {
         bad("error queue entry", reply, "unescaped quote in the text");
       ++i;
     }
-    e.message += text[i];
+    // The text goes into logs, alerts and JSON replies: bytes that are not printable ASCII
+    // (a control byte, another encoding) are written as \xNN.
+    const auto u = static_cast<unsigned char>(text[i]);
+    e.message += (u >= 0x20 && u < 0x7F) ? std::string(1, text[i]) : fmt::format("\\x{:02x}", u);
   }
   return e;
 }

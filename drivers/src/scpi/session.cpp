@@ -1,6 +1,7 @@
 // SCPI message exchange over any Transport: commands with a terminator, reply lines up to
-// NL or USBTMC EOM, bounded length, resynchronisation after a timeout (late replies are
-// dropped) and the device error queue (SYST:ERR?, SCPI-1999 Vol. 2 §21.8).
+// NL or USBTMC EOM, bounded length, resynchronisation after a timeout or a broken reply
+// (late replies are dropped, never taken for the next query's; scpi.hpp) and the device
+// error queue (SYST:ERR?, SCPI-1999 Vol. 2 §21.8).
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -8,15 +9,33 @@
 #include "gonio/proto/error.hpp"
 
 namespace gonio::drivers::scpi {
+namespace {
+
+// Lines one resynchronisation may drop before it gives up: a device that keeps talking
+// is not one we can get back in step with.
+constexpr int kMaxDroppedLines = 256;
+
+}  // namespace
 
 Session::Session(TransportPtr transport, SessionOptions options)
     : t_(std::move(transport)), opt_(std::move(options)) {}
 
-void Session::command(std::string_view cmd, Deadline deadline) {
+void Session::send(std::string_view cmd, Deadline deadline) {
   spdlog::trace("{} <- {}", t_->describe(), cmd);
   std::string msg(cmd);
   msg += opt_.terminator;
   t_->write(msg, deadline);
+}
+
+void Session::command(std::string_view cmd, Deadline deadline) {
+  if (!buf_.empty()) out_of_step_ = true;  // lines nobody asked for: whose reply are they?
+  resync(deadline);
+  try {
+    send(cmd, deadline);
+  } catch (const Error&) {
+    out_of_step_ = true;  // part of the message may have gone out
+    throw;
+  }
 }
 
 std::string Session::read_line(Deadline deadline) {
@@ -27,10 +46,12 @@ std::string Session::read_line(Deadline deadline) {
       buf_.erase(0, nl + 1);
       return line;
     }
-    if (buf_.size() > opt_.max_reply)
+    if (buf_.size() > opt_.max_reply) {
+      out_of_step_ = true;
       throw Error(Errc::protocol_error,
                   fmt::format("{}: reply longer than {} bytes without a terminator", t_->describe(),
                               opt_.max_reply));
+    }
     const auto r = t_->read_some(chunk, deadline);
     buf_.append(chunk, r.size);
     if (r.end_of_message && buf_.find('\n') == std::string::npos) {
@@ -41,48 +62,90 @@ std::string Session::read_line(Deadline deadline) {
   }
 }
 
+void Session::resync(Deadline deadline) {
+  if (!out_of_step_) return;
+  try {
+    buf_.clear();
+    // USBTMC: device clear; streams: drop what has arrived. Not while markers of an earlier
+    // attempt are unanswered: their "1" may be among the bytes dropped, and then counting
+    // them would wait for an answer that never comes.
+    if (markers_ == 0) t_->clear(deadline);
+    send("*OPC?", deadline);
+    ++markers_;
+    int dropped = 0;
+    while (markers_ > 0) {
+      const auto line = std::string(trim(read_line(deadline)));
+      if (line == "1") {
+        --markers_;
+        continue;
+      }
+      ++dropped_;
+      spdlog::debug("{}: dropped a late reply while resynchronising: '{}'", t_->describe(),
+                    line.substr(0, 80));
+      if (++dropped > kMaxDroppedLines)
+        throw Error(Errc::protocol_error, "the device keeps sending");
+    }
+    out_of_step_ = false;
+    spdlog::debug("{}: session resynchronised", t_->describe());
+  } catch (const Error& e) {
+    throw Error(Errc::disconnected,
+                fmt::format("{}: cannot resynchronise the session after a failed exchange ({}); "
+                            "the device must be reopened",
+                            t_->describe(), e.what()));
+  }
+}
+
 std::string Session::query(std::string_view cmd, Deadline deadline) {
-  buf_.clear();  // nothing unread belongs to this query
   command(cmd, deadline);
   try {
     auto line = std::string(trim(read_line(deadline)));
     spdlog::trace("{} -> {}", t_->describe(), line);
     return line;
   } catch (const Error& e) {
+    out_of_step_ = true;
     if (e.code() != Errc::timeout) throw;
-    // Drop whatever arrives late, then ask the device why it did not answer.
-    buf_.clear();
+    // Get back in step (a late reply is dropped), then ask the device why it did not answer.
+    // If that does not work within a short grace, the next exchange tries again with its
+    // own deadline.
     const auto grace = deadline_after(std::chrono::milliseconds(300));
     try {
-      t_->clear(grace);
+      resync(grace);
     } catch (const Error&) {
+      throw Error(Errc::timeout, fmt::format("{}: no reply to '{}' in time", t_->describe(), cmd));
     }
     if (opt_.has_error_queue && cmd.rfind("SYST:ERR", 0) != 0) {
       std::vector<ErrorEntry> errors;
       try {
-        errors = drain_errors(grace);
+        errors = drain_errors_in_step(grace);
       } catch (const Error&) {
-        throw e;
+        out_of_step_ = true;
       }
       if (!errors.empty())
         throw Error(Errc::device_alarm,
                     fmt::format("{}: device rejected '{}': error {}, \"{}\"", t_->describe(), cmd,
                                 errors.front().code, errors.front().message));
     }
-    throw Error(Errc::timeout,
-                fmt::format("{}: no reply to '{}' in time", t_->describe(), cmd));
+    throw Error(Errc::timeout, fmt::format("{}: no reply to '{}' in time", t_->describe(), cmd));
   }
 }
 
-std::vector<ErrorEntry> Session::drain_errors(Deadline deadline) {
+std::vector<ErrorEntry> Session::drain_errors_in_step(Deadline deadline) {
   std::vector<ErrorEntry> out;
   for (int i = 0; i < 32; ++i) {
-    command("SYST:ERR?", deadline);
-    const auto e = parse_error_entry(read_line(deadline));
+    const auto e = parse_error_entry(query("SYST:ERR?", deadline));
     if (e.code == 0) break;
     out.push_back(e);
   }
   return out;
+}
+
+std::vector<ErrorEntry> Session::drain_errors(Deadline deadline) {
+  try {
+    return drain_errors_in_step(deadline);
+  } catch (const Error& e) {
+    if (e.code() == Errc::protocol_error) out_of_step_ = true;  // not an error entry: whose?
+    throw;
+  }
 }
 
 void Session::check_errors(std::string_view cmd, Deadline deadline) {

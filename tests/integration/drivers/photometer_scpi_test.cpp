@@ -4,6 +4,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -43,7 +44,7 @@ Errc code_of(auto&& f) {
 // gonio-devsim with a SCPI photometer on a pty and on TCP; reads the endpoints it prints.
 class Devsim {
  public:
-  Devsim() {
+  explicit Devsim(const std::vector<std::string>& extra = {}) {
     int fds[2];
     if (::pipe(fds) != 0) throw std::runtime_error("pipe");
     posix_spawn_file_actions_t fa;
@@ -52,6 +53,7 @@ class Devsim {
     posix_spawn_file_actions_addclose(&fa, fds[0]);
     const std::string exe = std::string(GONIO_BIN_DIR) + "/gonio-devsim";
     std::vector<std::string> args{exe, "--scpi-pty", "--scpi-tcp", "0", "--sample", "lambert:albedo=0.5"};
+    args.insert(args.end(), extra.begin(), extra.end());
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -189,4 +191,40 @@ TEST(PhotometerScpi, SilentDeviceTimesOutAndGarbageIsAProtocolError) {
   const auto idle_port = idle.listen_tcp();
   auto q = make_photometer("scpi-tcp", nlohmann::json{{"host", "127.0.0.1"}, {"port", idle_port}});
   EXPECT_EQ(code_of([&] { q->identify(200ms); }), Errc::timeout);
+}
+
+// A device that answers after the driver gave up: the late reply must never be taken for the
+// reply to the next query (here: a reference spectrum read as the dark one). The session
+// resynchronises (*OPC? marker) before the next query, whether the late reply has arrived
+// by then (pty, after a pause) or is still on its way (TCP, at once).
+TEST(PhotometerScpi, LateReplyIsNeverTakenForTheNextReading) {
+  char path[] = "/tmp/gonio-late-XXXXXX";
+  const int fd = ::mkstemp(path);
+  ASSERT_GE(fd, 0);
+  ::close(fd);
+  // The 2nd measurement query is answered 700 ms late; dark ≈ 200 counts, reference ≈ 50 200.
+  std::ofstream(path) << R"({"late_reply_at": 2, "late_reply_ms": 700})";
+  for (const bool over_tcp : {false, true}) {
+    SCOPED_TRACE(over_tcp ? "tcp" : "pty");
+    Devsim sim({"--scpi-config", path});
+    std::unique_ptr<Photometer> p;
+    if (over_tcp) {
+      const auto tcp = TcpConfig::parse(sim.tcp);
+      p = make_photometer("scpi-tcp", nlohmann::json{{"host", tcp.host}, {"port", tcp.port}});
+    } else {
+      p = make_photometer("scpi-serial", nlohmann::json{{"device", sim.pty}, {"baud", 115200}});
+    }
+    p->measure(Channel::sample, 5s);
+    EXPECT_EQ(code_of([&] { p->measure(Channel::reference, 250ms); }), Errc::timeout);
+    if (!over_tcp) std::this_thread::sleep_for(1s);  // the late reply is waiting to be read
+    const auto dark = p->measure(Channel::dark, 5s);
+    const auto ref = p->measure(Channel::reference, 5s);
+    ASSERT_EQ(dark.spectrum.size(), 31u);
+    for (std::size_t i = 0; i < 31; ++i) {
+      EXPECT_LT(dark.spectrum.values[i], 1000) << "a late reference reply read as dark, channel " << i;
+      EXPECT_GT(ref.spectrum.values[i], 10000) << i;
+    }
+    EXPECT_EQ(p->identify(2s).manufacturer, "GONIO");  // and in step afterwards
+  }
+  std::remove(path);
 }

@@ -102,6 +102,18 @@ TEST(Config, RejectsUnknownKeysAndBadValuesNamingThem) {
   EXPECT_EQ(field_of("[server\n"), "config");  // TOML syntax error
 }
 
+TEST(Config, ReconnectBackOffIsBoundedAndOrdered) {
+  const auto d = Config::parse("");
+  EXPECT_EQ(d.reconnect_initial, std::chrono::milliseconds(500));
+  EXPECT_EQ(d.reconnect_max, std::chrono::milliseconds(30000));
+  const auto c = Config::parse("[instrument]\nreconnect_initial_s = 2\nreconnect_max_s = 120\n");
+  EXPECT_EQ(c.reconnect_initial, std::chrono::milliseconds(2000));
+  EXPECT_EQ(c.reconnect_max, std::chrono::milliseconds(120000));
+  EXPECT_EQ(field_of("[instrument]\nreconnect_initial_s = 0\n"), "instrument.reconnect_initial_s");
+  EXPECT_EQ(field_of("[instrument]\nreconnect_initial_s = 5\nreconnect_max_s = 1\n"),
+            "instrument.reconnect_max_s");
+}
+
 TEST(Config, RemoteListenNeedsOptIn) {
   const auto c = Config::parse("[server]\nallow_remote = true\nlisten = [\"tcp://0.0.0.0:7700\"]\n");
   EXPECT_FALSE(c.listen[0].loopback());

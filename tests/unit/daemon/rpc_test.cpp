@@ -54,6 +54,7 @@ TEST_F(DispatcherTest, AnswersARequestWithItsId) {
 
 TEST_F(DispatcherTest, StandardErrorCodes) {
   EXPECT_EQ(call("{not json")["error"]["code"], -32700);
+  EXPECT_EQ(call("[1E400]")["error"]["code"], -32700);  // a number no double holds: not a throw
   EXPECT_TRUE(call("{not json")["id"].is_null());
   EXPECT_EQ(call("42")["error"]["code"], -32600);
   EXPECT_EQ(call(R"({"jsonrpc":"1.0","id":1,"method":"echo"})")["error"]["code"], -32600);

@@ -64,6 +64,8 @@ TEST(ScpiReply, ErrorQueueEntries) {
   EXPECT_EQ(scpi::parse_error_entry("-113,\"Undefined header\""),
             (scpi::ErrorEntry{-113, "Undefined header"}));
   EXPECT_EQ(scpi::parse_error_entry("+201,\"say \"\"hi\"\"\""), (scpi::ErrorEntry{201, "say \"hi\""}));
+  // Bytes that are not printable ASCII end up in logs and JSON replies: escaped.
+  EXPECT_EQ(scpi::parse_error_entry("-222,\"Temp 40\xb0\x01\""), (scpi::ErrorEntry{-222, "Temp 40\\xb0\\x01"}));
   for (const char* bad : {"", "-113", "x,\"a\"", "-113,a", "-113,\"a\"b\""})
     EXPECT_EQ(code_of([&] { scpi::parse_error_entry(bad); }), Errc::protocol_error) << bad;
 }

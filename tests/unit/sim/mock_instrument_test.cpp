@@ -106,7 +106,19 @@ TEST(MockInstrument, ScriptedFaultsAreTypedErrors) {
     m.photometer->measure(Channel::sample, 1s);
     EXPECT_EQ(code_of([&] { m.photometer->measure(Channel::sample, 1s); }), Errc::disconnected);
     EXPECT_EQ(code_of([&] { m.photometer->measure(Channel::reference, 1s); }), Errc::disconnected);
-    EXPECT_EQ(code_of([&] { m.motion->move(Axis::incidence, 10, 1s); }), Errc::disconnected);
+    EXPECT_NO_THROW(m.motion->move(Axis::incidence, 10, 1s));  // only the photometer is unplugged
+    // A replug: a new handle on the same lab works, the old one stays dead, and the point
+    // count goes on (the fault does not fire again).
+    auto again = mock::connect_photometer(m.lab);
+    EXPECT_NO_THROW(again->measure(Channel::sample, 1s));
+    EXPECT_EQ(code_of([&] { m.photometer->measure(Channel::dark, 1s); }), Errc::disconnected);
+  }
+  {
+    auto cfg = base_config();
+    cfg["faults"] = {{"disconnect_at_point", 1}, {"reconnect_after_ms", 3600000}};
+    auto m = mock::make_mock(cfg);
+    EXPECT_EQ(code_of([&] { m.photometer->measure(Channel::sample, 1s); }), Errc::disconnected);
+    EXPECT_EQ(code_of([&] { mock::connect_photometer(m.lab); }), Errc::disconnected);  // still out
   }
   {
     auto m = with("timeout_at_point", 1);

@@ -110,7 +110,10 @@ ModelTemplate::ModelTemplate(std::string_view spec, const WavelengthGrid& grid)
     if (l.name.empty()) continue;  // a tabulated file has no parameters
     const auto* model = bsdf::find_model(l.name);
     const auto lobe_name = name_count[l.name] > 1 ? fmt::format("{}#{}", l.name, n) : l.name;
-    for (const auto& [key, value] : l.args) {
+    for (const auto& arg : l.args) {
+      // Not a structured binding: lambdas cannot capture those before clang 16.
+      const auto& key = arg.first;
+      const auto& value = arg.second;
       const auto locate = [&](double v, std::optional<double> nm) {
         for (std::size_t k = 0; k < raw.size(); ++k) {
           if (v != sentinel_value(k)) continue;

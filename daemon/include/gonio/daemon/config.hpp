@@ -94,6 +94,10 @@ struct Config {
   bool auto_resume = false;
   milliseconds auto_resume_delay{30000};
   int max_auto_resumes = 3;
+  // A device whose link failed is dropped and opened again after reconnect_initial, then
+  // after twice the previous wait, at most reconnect_max.
+  milliseconds reconnect_initial{500};
+  milliseconds reconnect_max{30000};
 
   // [twin]
   unsigned twin_threads = 0;  // 0: hardware concurrency

@@ -10,6 +10,15 @@
 // The point is committed before the next move, so a crash loses at most the point being
 // measured, and a restart resumes at the next unmeasured point (Store::next_point_index).
 //
+// Devices come back: a device call that fails on its link (disconnected, io_error) drops
+// that device (motion controller or photometer), and the runner opens it again through the
+// registry's InstrumentOpener — the motion controller under the same guard, the mock on the
+// same lab — after reconnect_initial, doubling the wait after every failed attempt up to
+// reconnect_max. A motion controller that comes back may have lost its position (a
+// stepper controller that rebooted), so after such a reconnection no arm moves and no scan
+// starts until every axis has been homed (instrument.home). status() shows each device's
+// link, last error and next retry.
+//
 // Scheduling: interrupted scans first, then queued scans in queue order whose not-before
 // time has passed. A device fault pauses the scan (reason in its state), raises a critical
 // alert and latches the instrument: nothing else starts until a technician resumes a scan
@@ -52,6 +61,11 @@
 #include "gonio/drivers/motion/collision.hpp"
 #include "gonio/drivers/motion/motion_controller.hpp"
 #include "gonio/drivers/photometer/photometer.hpp"
+#include "gonio/proto/error.hpp"
+
+namespace gonio::drivers {
+class InstrumentOpener;
+}
 
 namespace gonio::daemon {
 
@@ -105,10 +119,31 @@ class Instrument {
   struct Command {
     std::function<nlohmann::json()> fn;
     std::promise<nlohmann::json> done;
+    bool needs_devices = true;
+  };
+
+  enum class Side { motion, photometer };
+  // One device's link, for status() and the reconnection back-off (under mu_).
+  struct Link {
+    bool up = false;
+    bool ever_up = false;   // opened once: a later open is a reconnection
+    std::string error, errc, error_at;  // the last failure (message, Errc id, UTC)
+    std::optional<std::chrono::steady_clock::time_point> next_retry;
+    std::chrono::milliseconds wait{0};  // before the attempt after next_retry, if it fails
+    int failures = 0;                   // failed opens since the link was last up
+    std::uint64_t reconnects = 0;
   };
 
   void loop();
-  void open_devices();
+  // Opens every side that is down and due. `at_start`: a configuration error throws.
+  void open_devices(bool at_start = false);
+  void open_side(Side s, bool at_start);
+  // A device call failed on its link: the device is closed and reopened later (runner thread).
+  void drop_device(Side s, const Error& e);
+  Link& link(Side s) { return links_[static_cast<int>(s)]; }
+  const Link& link(Side s) const { return links_[static_cast<int>(s)]; }
+  nlohmann::json link_json(Side s) const;  // under mu_
+  Error devices_down() const;              // under mu_: which device is missing, and why
   void start_run(const Scan& scan);
   void step();                        // measures one point of the current run
   void finish_run(ScanState state, const std::string& reason, const std::string& actor);
@@ -122,7 +157,8 @@ class Instrument {
                   const std::string& actor);
   DeviceFacts device_facts() const;  // for check_plan
   void on_device_fault(const Error& e);
-  nlohmann::json submit(std::function<nlohmann::json()> fn);
+  // Runs `fn` on the runner thread. `needs_devices`: refused while a device is down.
+  nlohmann::json submit(std::function<nlohmann::json()> fn, bool needs_devices = true);
   void set_state(std::string state, std::string detail = {});
   void settle_state(std::string detail = {});  // "fault" while latched, else "idle"
   void publish_state();
@@ -165,8 +201,9 @@ class Instrument {
   std::optional<std::pair<std::int64_t, std::chrono::steady_clock::time_point>> auto_resume_;
   std::map<std::int64_t, int> auto_resumes_;
   std::string state_ = "starting", state_detail_;
-  std::optional<std::chrono::steady_clock::time_point> next_open_attempt_;
-  std::string open_error_;
+  std::unique_ptr<drivers::InstrumentOpener> opener_;
+  Link links_[2];
+  std::vector<drivers::Axis> unhomed_;  // to home before any move: the controller reconnected
   // Cached device facts (under mu_).
   std::vector<drivers::Axis> axes_;
   std::map<drivers::Axis, double> positions_;

@@ -30,7 +30,7 @@
 #include <utility>
 #include <vector>
 
-#include <nlohmann/json_fwd.hpp>
+#include <nlohmann/json.hpp>
 
 #include "gonio/drivers/motion/guarded_motion.hpp"
 #include "gonio/drivers/motion/limits.hpp"
@@ -79,9 +79,39 @@ std::unique_ptr<Photometer> make_photometer(std::string_view driver, const nlohm
 // field ("motion.profile", "min_separation", ...).
 MotionGuard motion_guard(const MotionLimits& limits, const nlohmann::json& motion);
 
+namespace mock {
+class Lab;
+}
+
 struct Instrument {
   std::unique_ptr<GuardedMotion> motion;
   std::unique_ptr<Photometer> photometer;
+};
+
+// Opens the sides of an instrument one at a time, and again after a side was dropped (a
+// device that went away: a USB replug, a device rebooted): the same driver tables, the
+// motion controller always wrapped in a GuardedMotion with the same guard, and with the
+// mock the same virtual lab, so that a reconnection finds the lab as it left it. The
+// constructor checks the tables' shape (sides, driver names); the drivers' own keys are
+// checked by the first open of each side. Errors name the field ("motion.driver", ...).
+class InstrumentOpener {
+ public:
+  InstrumentOpener(const nlohmann::json& config, const MotionGuard& guard);
+  ~InstrumentOpener();
+  InstrumentOpener(const InstrumentOpener&) = delete;
+  InstrumentOpener& operator=(const InstrumentOpener&) = delete;
+
+  std::unique_ptr<GuardedMotion> open_motion();
+  std::unique_ptr<Photometer> open_photometer();
+  const MotionGuard& guard() const noexcept { return guard_; }
+
+ private:
+  std::shared_ptr<mock::Lab> lab();  // both sides mock: the one lab, built at first use
+
+  MotionGuard guard_;
+  std::string motion_driver_, photometer_driver_;
+  nlohmann::json motion_config_, photometer_config_;  // without "driver"
+  std::shared_ptr<mock::Lab> lab_;
 };
 // From the instrument config above, the motion controller wrapped in a GuardedMotion with
 // `guard`; errors name the field ("motion.driver", ...).

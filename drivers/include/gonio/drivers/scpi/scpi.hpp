@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -60,6 +61,15 @@ struct SessionOptions {
   bool has_error_queue = true;          // SYST:ERR? is understood
 };
 
+// Resynchronisation: after a timeout (the reply may still come) or a reply that broke the
+// protocol (it may have been an earlier query's), the session is out of step, and the next
+// exchange first brings it back: the link is cleared (pending input dropped; USBTMC: device
+// clear, INITIATE_CLEAR) unless markers of an earlier attempt are still unanswered, then
+// `*OPC?` (IEEE 488.2 §10.18) is sent and every line up to its "1" is dropped. A device answers in order, so whatever a late reply was, it came
+// before that "1"; markers that went unanswered are counted, so that a late "1" of an
+// earlier attempt is not taken for the current one. A session that cannot be resynchronised
+// before the call's deadline throws Error(disconnected): the link is unusable and the
+// device must be reopened.
 class Session {
  public:
   explicit Session(TransportPtr transport, SessionOptions options = {});
@@ -67,9 +77,9 @@ class Session {
   Transport& transport() noexcept { return *t_; }
   // Sends a command (no reply expected).
   void command(std::string_view cmd, Deadline deadline);
-  // Sends a query and returns its reply line (trimmed). On timeout the link is cleared and,
-  // if the device has an error queue, the device's own error is reported as device_alarm
-  // (a SCPI device sends no reply to a query it rejected).
+  // Sends a query and returns its reply line (trimmed). On timeout the session is
+  // resynchronised and, if the device has an error queue, the device's own error is
+  // reported as device_alarm (a SCPI device sends no reply to a query it rejected).
   std::string query(std::string_view cmd, Deadline deadline);
   // Reads SYST:ERR? until "0,..." (at most 32 entries).
   std::vector<ErrorEntry> drain_errors(Deadline deadline);
@@ -77,12 +87,25 @@ class Session {
   void check_errors(std::string_view cmd, Deadline deadline);
   void cancel() noexcept { t_->cancel(); }
 
+  // The caller found a reply that breaks the protocol: resynchronise before the next exchange.
+  void mark_out_of_step() noexcept { out_of_step_ = true; }
+  bool out_of_step() const noexcept { return out_of_step_; }
+  // Resynchronises now (see above); a no-op when in step.
+  void resync(Deadline deadline);
+  // Late replies dropped by resynchronisations so far (for logs and tests).
+  std::uint64_t dropped_replies() const noexcept { return dropped_; }
+
  private:
   std::string read_line(Deadline deadline);
+  void send(std::string_view cmd, Deadline deadline);
+  std::vector<ErrorEntry> drain_errors_in_step(Deadline deadline);
 
   TransportPtr t_;
   SessionOptions opt_;
   std::string buf_;  // received bytes not yet returned
+  bool out_of_step_ = false;
+  int markers_ = 0;  // *OPC? markers sent and not yet answered
+  std::uint64_t dropped_ = 0;
 };
 
 // ---- photometer driver -----------------------------------------------------------------

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -45,6 +46,11 @@ struct ScpiSimConfig {
   double pm100_watts = 1e-3;        // pm100: power at β = 1
   std::uint64_t seed = 1;
   Geometry geometry = Geometry::in_plane(45, 0);
+  // Scripted late answer: the reply to the Nth measurement query (MEAS:SPEC?, MEAS:POW?;
+  // counted from 1, 0: never) is sent late_reply_ms after the query, and the replies to
+  // anything after it wait behind it, as on a device busy with a long reading.
+  int late_reply_at = 0;
+  double late_reply_ms = 0;
 
   // Keys as above (identity as "manufacturer,model,serial,firmware"); unknown keys rejected.
   static ScpiSimConfig from_json(const nlohmann::json& j);
@@ -59,12 +65,15 @@ class ScpiSimDevice {
   // Returns the response message without terminator, empty when there is none.
   std::string handle(std::string_view message);
   std::size_t commands_handled() const;
+  // How long the response of the last handle() is to be held back (then zero again).
+  std::chrono::milliseconds take_reply_delay();
 
  private:
   std::string execute(std::string_view command);  // one command; may push errors
   void push_error(int code, std::string_view text);
   std::string measure_spectrum(std::string_view arg);
   std::string measure_power();
+  void count_measurement();  // the scripted late reply
 
   mutable std::mutex mu_;
   ScpiSimConfig cfg_;
@@ -74,6 +83,8 @@ class ScpiSimDevice {
   double pm_wavelength_ = 550;
   int pm_averages_ = 1;
   std::size_t handled_ = 0;
+  int measurements_ = 0;
+  std::chrono::milliseconds reply_delay_{0};
 };
 
 // Serves a device to one client at a time per endpoint, on a background thread.

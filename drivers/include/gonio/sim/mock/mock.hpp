@@ -14,7 +14,12 @@
 // so (S − D)/(R − D) reproduces the twin's radiance factor up to noise and drift.
 //
 // Scripted faults (counted from 1, "point" = a sample-channel measurement):
-//   disconnect_at_point N   the Nth sample reading and every later call fail: disconnected
+//   disconnect_at_point N   the photometer is unplugged at the Nth sample reading: that
+//                           call and every later call of that photometer fail with
+//                           disconnected. Opening it again (connect_photometer, as the
+//                           registry does after a replug) succeeds once reconnect_after_ms
+//                           (default 0: at once) have passed since the loss; the arms are
+//                           not affected
 //   timeout_at_point N      the Nth sample reading never answers: timeout (after the call's
 //                           timeout or timeout_wait_ms, whichever is shorter)
 //   garbage_at_point N      the Nth sample reading is unreadable: protocol_error
@@ -30,7 +35,8 @@
 //    "speed_deg_s": 20, "time_scale": 0, "seed": 1,
 //    "estimator": {"rel_se": 0.01, "max_samples": 65536, "replicates": 8},
 //    "faults": {"disconnect_at_point": N, "timeout_at_point": N, "garbage_at_point": N,
-//               "saturate_at_point": N, "stall_at_move": N, "timeout_wait_ms": 200}}
+//               "saturate_at_point": N, "stall_at_move": N, "timeout_wait_ms": 200,
+//               "reconnect_after_ms": 0}}
 #pragma once
 
 #include <memory>
@@ -58,6 +64,10 @@ struct MockInstrument {
 
 // One lab, both sides. Throws Error naming the field for a bad config.
 MockInstrument make_mock(const nlohmann::json& config);
+// New handles on an existing lab (a reconnection): the arms at once; the photometer throws
+// Error(disconnected) while it is still unplugged.
+std::unique_ptr<MotionController> connect_motion(const std::shared_ptr<Lab>& lab);
+std::unique_ptr<Photometer> connect_photometer(const std::shared_ptr<Lab>& lab);
 // Registry entries: each builds its own lab.
 std::unique_ptr<MotionController> make_mock_motion(const nlohmann::json& config);
 std::unique_ptr<Photometer> make_mock_photometer(const nlohmann::json& config);
