@@ -96,6 +96,7 @@ Scan Instrument::resume(std::int64_t id, const std::string& actor) {
     fault_reason_.clear();
     if (auto_resume_ && auto_resume_->first == id) auto_resume_.reset();
   }
+  acknowledge_faults(actor);
   cv_.notify_all();
   return queued;
 }
@@ -221,6 +222,7 @@ json Instrument::reset(const std::string& actor) {
       fault_latched_ = false;
       fault_reason_.clear();
     }
+    acknowledge_faults(actor);
     set_state("idle");
     cv_.notify_all();
     return status();
