@@ -46,6 +46,9 @@ class Auth {
   std::string create(const std::string& name, Role role);
   bool revoke(const std::string& name);
   std::vector<TokenEntry> list() const;  // configured + stored (hashes)
+  // Whether a principal still stands: a token's is, while a token of that name and role
+  // exists (not revoked); a Unix peer's (name "unix:...") always is.
+  bool still_valid(const Principal& p) const;
 
   void reload();  // re-reads the stored tokens
 
