@@ -2,6 +2,7 @@
 #include "gonio/daemon/daemon.hpp"
 
 #include <sys/stat.h>
+#include <malloc.h>
 #include <systemd/sd-daemon.h>
 #include <unistd.h>
 
@@ -92,6 +93,10 @@ Config load_config(const DaemonOptions& o) {
 }  // namespace
 
 int run_daemon(const DaemonOptions& o) {
+  // Large buffers (message lines, answers, exports) come from mmap and go back to the system
+  // when freed: glibc's adaptive threshold would otherwise move them into the heap after
+  // the first one, where a burst of hostile requests leaves the memory resident.
+  ::mallopt(M_MMAP_THRESHOLD, 256 << 10);
   ::umask(027);  // the store, its journal and endpoints.json: owner and group only
   Config config;
   try {

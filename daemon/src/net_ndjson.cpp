@@ -54,6 +54,7 @@ json NetStats::to_json() const {
               {"refused_origin", refused_origin.load()},
               {"refused_content_type", refused_content_type.load()},
               {"accept_backoffs", accept_backoffs.load()},
+              {"overload_dropped", overload_dropped.load()},
               {"revoked_sessions_ended", revoked_sessions.load()}};
 }
 
@@ -90,7 +91,7 @@ class NdjsonSession final : public rpc::Session,
 
   ~NdjsonSession() override {
     --ls_->connections;
-    stats_.buffered_bytes -= queued_bytes_.load();
+    stats_.buffered_bytes -= queued_bytes_.load() + input_accounted_;
   }
 
   void start() {
@@ -154,6 +155,14 @@ class NdjsonSession final : public rpc::Session,
     return true;
   }
 
+  // Keeps the shared budget's count of this connection's unparsed input up to date.
+  void account_input() {
+    const auto now = buffer_.size();
+    if (now >= input_accounted_) stats_.buffered_bytes += now - input_accounted_;
+    else stats_.buffered_bytes -= input_accounted_ - now;
+    input_accounted_ = now;
+  }
+
   void release(std::size_t bytes) {
     --queued_;
     queued_bytes_ -= bytes;
@@ -190,8 +199,16 @@ class NdjsonSession final : public rpc::Session,
     last_activity_ = Clock::now();
     if (buffer_.empty() && n > 0) partial_since_ = last_activity_;
     buffer_.append(chunk_.data(), n);
+    account_input();
     handle_lines();
     if (closed_) return;
+    // Unfinished lines count against the same budget as answers: many peers each sending
+    // most of a maximal line cannot together take more than it.
+    if (buffer_.size() > kReadPauseBytes && stats_.buffered_bytes.load() > limits_.max_buffered_bytes) {
+      ++stats_.overload_dropped;
+      close("goniod's buffers are full (server.max_buffered_bytes) and this peer sends a large message");
+      return;
+    }
     if (buffer_.size() > limits_.max_message_bytes && buffer_.find('\n') == std::string::npos) {
       too_large();
       return;
@@ -223,6 +240,7 @@ class NdjsonSession final : public rpc::Session,
     buffer_.erase(0, start);
     if (buffer_.empty()) buffer_.shrink_to_fit();  // a 1 MB line does not stay allocated
     else partial_since_ = Clock::now();
+    account_input();
   }
 
   void too_large() {
@@ -230,6 +248,7 @@ class NdjsonSession final : public rpc::Session,
                  limits_.max_message_bytes);
     buffer_.clear();
     buffer_.shrink_to_fit();
+    account_input();
     enqueue(std::make_shared<const std::string>(
                 json{{"jsonrpc", "2.0"},
                      {"error", rpc::error_object(rpc::code::invalid_request,
@@ -392,6 +411,7 @@ class NdjsonSession final : public rpc::Session,
     }
     buffer_.clear();
     buffer_.shrink_to_fit();
+    account_input();
   }
 
   Socket socket_;
@@ -408,6 +428,7 @@ class NdjsonSession final : public rpc::Session,
   std::atomic<bool> closing_{false};
   bool reading_ = false, writing_ = false, closed_ = false, close_after_write_ = false;
   std::size_t in_flight_ = 0;
+  std::size_t input_accounted_ = 0;  // bytes of buffer_ counted in stats_.buffered_bytes
   Clock::time_point partial_since_, last_activity_, deadline_;
 };
 

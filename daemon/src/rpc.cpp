@@ -153,7 +153,10 @@ struct Dispatcher::Pending {
   json message;
   std::vector<json> ids;  // each element's id (null when unusable), for errors in its place
   std::vector<std::optional<std::string>> slots;
-  std::size_t next = 0, running = 0, remaining = 0, bytes = 2;
+  std::vector<char> done;  // per element: answered (a notification answers with nothing)
+  std::string out;         // the answers so far, in request order: slots are moved in as
+                           // soon as every earlier element has answered
+  std::size_t next = 0, running = 0, remaining = 0, bytes = 2, flushed = 0;
   bool pumping = false;
   std::function<void(std::string)> reply;
 };
@@ -221,6 +224,7 @@ std::size_t Dispatcher::handle(std::string_view text, const std::shared_ptr<Sess
     auto pending = std::make_shared<Pending>();
     pending->message = std::move(message);
     pending->slots.resize(n);
+    pending->done.resize(n, 0);
     pending->ids.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
       const auto& e = pending->message[i];
@@ -273,21 +277,20 @@ void Dispatcher::pump(const std::shared_ptr<Pending>& p, const std::shared_ptr<S
           p->bytes += r->size() + 1;
         }
         p->slots[i] = std::move(r);
+        p->done[i] = 1;
+        for (; p->flushed < p->slots.size() && p->done[p->flushed]; ++p->flushed) {
+          auto& slot = p->slots[p->flushed];
+          if (!slot) continue;
+          p->out += p->out.empty() ? '[' : ',';
+          p->out += *slot;
+          slot.reset();
+        }
         if (--p->remaining == 0) finish = std::move(p->reply);
       }
       if (finish) {
-        std::string out;
-        std::size_t total = 2;
-        for (const auto& s : p->slots)
-          if (s) total += s->size() + 1;
-        out.reserve(total);
-        for (auto& s : p->slots)
-          if (s) {
-            out += out.empty() ? '[' : ',';
-            out += *s;
-            s.reset();
-          }
+        std::string out = std::move(p->out);
         if (!out.empty()) out += ']';
+        p->message = json();
         finish(std::move(out));
         return;
       }

@@ -62,12 +62,13 @@ struct Limits {
 
 // Counters and the shared outgoing byte budget of every listener (system.info "net").
 struct NetStats {
-  std::atomic<std::size_t> buffered_bytes{0};        // queued for writing, all connections
+  std::atomic<std::size_t> buffered_bytes{0};        // unparsed input and queued output, all connections
   std::atomic<std::uint64_t> slow_readers{0};        // dropped: queue full or write deadline
   std::atomic<std::uint64_t> login_timeouts{0};      // dropped: no login within the deadline
   std::atomic<std::uint64_t> refused_origin{0};      // WebSocket upgrades / POSTs from a foreign origin
   std::atomic<std::uint64_t> refused_content_type{0};  // POST /rpc without application/json
   std::atomic<std::uint64_t> accept_backoffs{0};     // accept() out of file descriptors
+  std::atomic<std::uint64_t> overload_dropped{0};    // dropped mid-message: the shared budget was full
   std::atomic<std::uint64_t> revoked_sessions{0};    // ended because their token was revoked
   nlohmann::json to_json() const;
 };
