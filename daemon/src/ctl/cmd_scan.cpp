@@ -118,7 +118,7 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
   auto* submit = scan->add_subcommand("submit", "queue a scan");
   submit->add_option("--sample", a->sample, "sample id or name")->required();
   submit->add_option("--geometry", a->geometries, "45as15, 45/-30 or astm (repeatable)");
-  submit->add_option("--grid", a->grids, "grid, e.g. 'in=45;out=-80:80:2' (repeatable)");
+  submit->add_option("--grid", a->grids, "grid, e.g. 'in=45;out=-30:80:2' (repeatable)");
   submit->add_option("--wavelengths", a->wavelengths, "e.g. 400:700:10");
   submit->add_option("--repeats", a->repeats);
   submit->add_option("--reference", a->reference, "every_point, interval or start");
