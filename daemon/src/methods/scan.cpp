@@ -181,7 +181,7 @@ void register_scan(MethodRegistrar& reg, Services& s) {
   reg.add("scan.fit", [&s](rpc::Call& c) {
     ObjectReader r(c.params, "");
     const auto id = read_id(r, "scan");
-    const auto model = r.required<std::string>("model");
+    const auto model = methods::confine_bsdf_files(r.required<std::string>("model"), s.data_dir, "model");
     auto options = methods::read_fit_options(r, s.twin);
     r.finish();
     if (model.empty() || model.size() > 4096)
