@@ -2,8 +2,11 @@
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/types.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <cerrno>
 #include <atomic>
 #include <deque>
 #include <filesystem>
@@ -44,6 +47,13 @@ Limits Limits::from(const Config& c) {
   l.login_timeout = c.login_timeout;
   l.max_in_flight = c.max_in_flight;
   l.allowed_origins = c.allowed_origins;
+  const auto& u = c.unix_roles;
+  l.admin_uids = u.admin_uids.value_or(std::vector<std::uint32_t>{0, ::geteuid()});
+  l.admin_gids = u.admin_gids.value_or(std::vector<std::uint32_t>{});
+  l.technician_uids = u.technician_uids.value_or(std::vector<std::uint32_t>{});
+  l.technician_gids = u.technician_gids.value_or(std::vector<std::uint32_t>{::getegid()});
+  l.viewer_uids = u.viewer_uids.value_or(std::vector<std::uint32_t>{});
+  l.viewer_gids = u.viewer_gids.value_or(std::vector<std::uint32_t>{});
   return l;
 }
 
@@ -56,6 +66,20 @@ json NetStats::to_json() const {
               {"accept_backoffs", accept_backoffs.load()},
               {"overload_dropped", overload_dropped.load()},
               {"revoked_sessions_ended", revoked_sessions.load()}};
+}
+
+// The role of a Unix-socket peer from its uid and groups: the highest that any of them maps to.
+Role unix_role(const Limits& l, std::uint32_t uid, const std::vector<gid_t>& gids) {
+  const auto has = [](const std::vector<std::uint32_t>& v, std::uint32_t x) {
+    return std::find(v.begin(), v.end(), x) != v.end();
+  };
+  const auto any_gid = [&](const std::vector<std::uint32_t>& v) {
+    return std::any_of(gids.begin(), gids.end(), [&](gid_t g) { return has(v, g); });
+  };
+  if (has(l.admin_uids, uid) || any_gid(l.admin_gids)) return Role::admin;
+  if (has(l.technician_uids, uid) || any_gid(l.technician_gids)) return Role::technician;
+  if (has(l.viewer_uids, uid) || any_gid(l.viewer_gids)) return Role::viewer;
+  return Role::none;
 }
 
 // Whether an accept() failed for want of file descriptors: the listener then waits rather
@@ -540,11 +564,21 @@ class NdjsonListener final : public Listener,
     if constexpr (std::is_same_v<Protocol, asio::local::stream_protocol>) {
       ucred cred{};
       socklen_t len = sizeof cred;
-      if (getsockopt(socket.native_handle(), SOL_SOCKET, SO_PEERCRED, &cred, &len) == 0)
-        peer = fmt::format("uid={} pid={}", cred.uid, cred.pid);
-      // The socket's file mode is the local gate: whoever can open it is trusted.
+      const bool known = getsockopt(socket.native_handle(), SOL_SOCKET, SO_PEERCRED, &cred, &len) == 0;
+      if (known) peer = fmt::format("uid={} pid={}", cred.uid, cred.pid);
+      // The socket's file mode lets the peer in; its uid and groups give it a role
+      // ([auth.unix]): a lab member in the socket's group is a technician, not an admin.
+      std::vector<gid_t> groups(64);
+      socklen_t glen = static_cast<socklen_t>(groups.size() * sizeof(gid_t));
+      if (getsockopt(socket.native_handle(), SOL_SOCKET, SO_PEERGROUPS, groups.data(), &glen) != 0 && errno == ERANGE) {
+        groups.resize(glen / sizeof(gid_t) + 1);
+        glen = static_cast<socklen_t>(groups.size() * sizeof(gid_t));
+        if (getsockopt(socket.native_handle(), SOL_SOCKET, SO_PEERGROUPS, groups.data(), &glen) != 0) glen = 0;
+      }
+      groups.resize(glen / sizeof(gid_t));
+      if (known) groups.push_back(cred.gid);
       principal.name = fmt::format("unix:uid={}", cred.uid);
-      principal.role = Role::admin;
+      principal.role = known ? unix_role(ls_->ctx.limits, cred.uid, groups) : Role::none;
     } else {
       error_code ec;
       // Every reply is one write: Nagle would only hold back the tail of a large one.

@@ -2,8 +2,9 @@
 // this family (one per listener kind), so that the rest of the daemon compiles without them.
 //
 //   unix:PATH          NDJSON, one JSON-RPC message per line; the socket file is mode 0660
-//                      and a peer that can open it is trusted as admin (the file mode is the
-//                      local gate); the audit log names it "unix:uid=N".
+//                      and a peer that can open it gets the role of its uid and groups
+//                      ([auth.unix]; none: auth.login first); the audit log names it
+//                      "unix:uid=N".
 //   tcp://HOST:PORT    NDJSON; nothing but rpc.discover and auth.login is answered before
 //                      auth.login with a valid token.
 //   http://HOST:PORT   POST /rpc (one message per request, Authorization: Bearer TOKEN) and
@@ -56,6 +57,9 @@ struct Limits {
   std::size_t max_connections = 512;
   std::size_t max_in_flight = 16;
   std::vector<std::string> allowed_origins;
+  // Unix-socket peers' roles (Config::unix_roles with the defaults filled in).
+  std::vector<std::uint32_t> admin_uids, admin_gids, technician_uids, technician_gids,
+      viewer_uids, viewer_gids;
 
   static Limits from(const Config& c);
 };
