@@ -220,6 +220,30 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
 
   if (const json auth = table(top, "auth"); !auth.empty()) {
     ObjectReader r(auth, "auth");
+    if (const auto* u = r.raw("unix")) {
+      ObjectReader ur(*u, "auth.unix");
+      const auto ids = [&](const char* key, std::optional<std::vector<std::uint32_t>>& out) {
+        const auto* v = ur.raw(key);
+        if (!v) return;
+        const auto field = ur.path(key);
+        if (!v->is_array()) throw Error::invalid(field, "expected an array of numeric ids");
+        std::vector<std::uint32_t> list;
+        for (std::size_t i = 0; i < v->size(); ++i) {
+          const auto f = fmt::format("{}[{}]", field, i);
+          const auto id = json_util::get_as<long long>((*v)[i], f);
+          if (id < 0 || id > 4294967294ll) throw Error::out_of_range(f, static_cast<double>(id), 0, 4294967294.0);
+          list.push_back(static_cast<std::uint32_t>(id));
+        }
+        out = std::move(list);
+      };
+      ids("admin_uids", c.unix_roles.admin_uids);
+      ids("admin_gids", c.unix_roles.admin_gids);
+      ids("technician_uids", c.unix_roles.technician_uids);
+      ids("technician_gids", c.unix_roles.technician_gids);
+      ids("viewer_uids", c.unix_roles.viewer_uids);
+      ids("viewer_gids", c.unix_roles.viewer_gids);
+      ur.finish();
+    }
     if (const auto* toks = r.raw("token")) {
       if (!toks->is_array()) throw Error::invalid("auth.token", "expected [[auth.token]] tables");
       c.tokens.clear();
@@ -302,6 +326,9 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
     c.twin_replicates = static_cast<int>(r.optional_in<long long>("replicates", c.twin_replicates, 4, 1024));
     c.twin_seed = static_cast<std::uint64_t>(
         r.optional_in<long long>("seed", static_cast<long long>(c.twin_seed), 0, (1ll << 62)));
+    c.twin_data_dir = r.optional<std::string>("data_dir", c.twin_data_dir);
+    if (!c.twin_data_dir.empty() && c.twin_data_dir.front() != '/')
+      throw Error::invalid("twin.data_dir", fmt::format("'{}' must be an absolute path", c.twin_data_dir));
     r.finish();
   }
 

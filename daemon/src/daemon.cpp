@@ -160,7 +160,8 @@ int run_daemon(const DaemonOptions& o) {
                       [&net_stats] { return net_stats.to_json(); },
                       [&listeners](const std::string& name) {
                         for (const auto& l : listeners) l->end_sessions_of(name);
-                      }};
+                      },
+                      config.twin_data_dir.empty() ? state / "data" : fs::path(config.twin_data_dir)};
     register_methods(dispatcher, services);
 
     // ---- listeners: the state dir's socket always, then the configured ones.

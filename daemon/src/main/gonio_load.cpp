@@ -407,7 +407,7 @@ int main(int argc, char** argv) {
     if (!dir.empty()) {
       admin.call("sample.create", json{{"name", "load"}, {"bsdf", gonio::daemon::kDemoSampleBsdf}});
       const auto s = admin.call("scan.submit", json{{"sample", "load"},
-                                                   {"grids", {"in=15,30,45,60;out=-80:80:1"}},
+                                                   {"grids", {"in=15,30,45,60;out=-5:80:1"}},
                                                    {"repeats", 2}});
       scan = s["id"].get<std::int64_t>();
       // Wait until the scan runs and has points to page through.

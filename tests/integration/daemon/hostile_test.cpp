@@ -1,6 +1,9 @@
 // Hostile clients against a real goniod: amplifying batches, peers that do not read or do
 // not log in, browsers on foreign pages, revoked tokens on live connections; and the fault
 // latch across a crash.
+#include <grp.h>
+#include <sys/stat.h>
+
 #include <gtest/gtest.h>
 
 #include "harness.hpp"
@@ -304,6 +307,86 @@ TEST(Hostile, ExportsComeInChunksThatMakeTheWholeFile) {
   r = c.request("scan.export", json{{"scan", id}, {"format", "csv"}, {"limit", 100000}});
   EXPECT_EQ(r["error"]["code"], -32602);
   EXPECT_EQ(r["error"]["data"]["field"], "limit");
+}
+
+}  // namespace
+}  // namespace gonio::test
+
+namespace gonio::test {
+namespace {
+
+TEST(Hostile, BsdfFilesComeOnlyFromTheDataDirectory) {
+  TempDir dir;
+  Goniod g(dir.path, mock_config({}));
+  const auto data = dir.path / "data";
+  fs::create_directories(data / "sub");
+  std::ofstream(data / "sub" / "refl.csv") << "400,0.5\n700,0.6\n";
+  fs::create_symlink(data / "sub" / "refl.csv", data / "link.csv");
+  ::mkfifo((data / "fifo.csv").c_str(), 0600);
+  auto c = g.unix_conn();
+  const auto create = [&](const std::string& name, const std::string& bsdf) {
+    return c.request("sample.create", json{{"name", name}, {"bsdf", bsdf}});
+  };
+  const auto ok = create("ok", "lambert:albedo=@sub/refl.csv");
+  ASSERT_TRUE(ok.contains("result")) << ok.dump();
+  EXPECT_NE(ok["result"]["bsdf"].get<std::string>().find((data / "sub" / "refl.csv").string()), std::string::npos);
+  for (const auto& bad : {"lambert:albedo=@../goniod.db", "lambert:albedo=@/etc/passwd", "lambert:albedo=@link.csv",
+                          "lambert:albedo=@fifo.csv", "lambert:albedo=@sub", "lambert:albedo=@sub/refl.csv,x/../../../etc/passwd",
+                          "lambert:albedo=@sub/../sub/refl.csv", "@nosuch.ssdd"}) {
+    const auto r = create("bad", bad);
+    EXPECT_EQ(r["error"]["code"], -32602) << bad << ": " << r.dump();
+    EXPECT_EQ(r["error"]["data"]["field"], "bsdf") << bad;
+  }
+  const auto p = c.request("twin.predict", json{{"bsdf", "lambert:albedo=@/etc/hostname"}, {"geometries", {"45as15"}}});
+  EXPECT_EQ(p["error"]["data"]["field"], "bsdf") << p.dump();
+}
+
+}  // namespace
+}  // namespace gonio::test
+
+namespace gonio::test {
+namespace {
+
+// auth.whoami over goniod.sock from a child process running as `uid`:`gid` (needs root).
+json whoami_as(const Goniod& g, uid_t uid, gid_t gid) {
+  int fds[2];
+  if (::pipe(fds) != 0) throw std::runtime_error("pipe");
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::close(fds[0]);
+    std::string out = "{}";
+    if (::setgroups(0, nullptr) == 0 && ::setgid(gid) == 0 && ::setuid(uid) == 0) {
+      try {
+        auto c = g.unix_conn();
+        out = c.request("auth.whoami").dump();
+      } catch (const std::exception& e) {
+        out = json{{"connect", e.what()}}.dump();
+      }
+    }
+    (void)!::write(fds[1], out.data(), out.size());
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  std::string text;
+  char b[4096];
+  for (ssize_t n; (n = ::read(fds[0], b, sizeof b)) > 0;) text.append(b, static_cast<std::size_t>(n));
+  ::close(fds[0]);
+  ::waitpid(pid, nullptr, 0);
+  return json::parse(text);
+}
+
+TEST(Hostile, UnixPeersGetTheRoleOfTheirUidAndGroups) {
+  if (::geteuid() != 0) GTEST_SKIP() << "needs root to connect as other users";
+  TempDir dir;
+  MockOptions o;
+  o.extra = "[auth.unix]\nviewer_uids = [65533]\ntechnician_gids = [65532]\n";
+  Goniod g(dir.path, mock_config(o));
+  ::chmod(dir.path.c_str(), 0755);
+  ::chmod((dir.path / "goniod.sock").c_str(), 0666);  // let the test's other users in
+  EXPECT_EQ(whoami_as(g, 65533, 65533)["result"]["role"], "viewer");
+  EXPECT_EQ(whoami_as(g, 65531, 65532)["result"]["role"], "technician");
+  EXPECT_EQ(whoami_as(g, 65534, 65534)["error"]["code"], -32000);  // no role: log in first
+  EXPECT_EQ(g.unix_conn().call("auth.whoami")["role"], "admin");  // root
 }
 
 }  // namespace

@@ -83,6 +83,14 @@ struct Config {
 
   // [auth]
   std::vector<TokenEntry> tokens;  // [[auth.token]] name, role, sha256
+  // [auth.unix]: roles of Unix-socket peers by their uid and groups (primary and
+  // supplementary). Unset lists take their defaults at start: admin_uids root and the
+  // user goniod runs as, technician_gids goniod's group (the socket's). A peer that
+  // matches nothing has no role and must auth.login like a TCP peer.
+  struct UnixRoles {
+    std::optional<std::vector<std::uint32_t>> admin_uids, admin_gids, technician_uids,
+        technician_gids, viewer_uids, viewer_gids;
+  } unix_roles;
 
   // [store]
   bool synchronous_full = true;  // "full": fsync every committed point; "normal": WAL default
@@ -109,6 +117,7 @@ struct Config {
   std::uint64_t twin_max_samples = 1ull << 20;
   int twin_replicates = 16;
   std::uint64_t twin_seed = 1;
+  std::string twin_data_dir;  // '@file' BSDF specs from clients: only here (empty: <state-dir>/data)
 
   // [divergence]
   double z_threshold = 5.0;
