@@ -262,7 +262,7 @@ class NdjsonSession final : public rpc::Session,
     }
     if (start == 0) return;
     buffer_.erase(0, start);
-    if (buffer_.empty()) buffer_.shrink_to_fit();  // a 1 MB line does not stay allocated
+    if (buffer_.empty() && buffer_.capacity() > kReadPauseBytes) buffer_.shrink_to_fit();  // a 1 MB line does not stay allocated
     else partial_since_ = Clock::now();
     account_input();
   }
@@ -349,13 +349,8 @@ class NdjsonSession final : public rpc::Session,
     const auto done = [self = this->shared_from_this()](const error_code& ec, std::size_t) {
       self->on_written(ec);
     };
-    const auto gen = ++write_gen_;
-    write_timer_.expires_after(limits_.write_timeout);
-    write_timer_.async_wait([self = this->shared_from_this(), gen](const error_code& ec) {
-      if (ec || self->closed_ || !self->writing_ || self->write_gen_ != gen) return;
-      self->slow_reader(fmt::format("a write did not complete within {} s (the peer does not read)",
-                                    std::chrono::duration<double>(self->limits_.write_timeout).count()));
-    });
+    write_started_ = Clock::now();
+    arm_write_timer();
     if (writing_count_ == 1) {
       const std::array<asio::const_buffer, 2> bufs{asio::buffer(*out_.front()), asio::buffer("\n", 1)};
       asio::async_write(socket_, bufs, done);
@@ -372,7 +367,6 @@ class NdjsonSession final : public rpc::Session,
 
   void on_written(const error_code& ec) {
     writing_ = false;
-    write_timer_.cancel();
     if (closed_) return;
     for (std::size_t i = 0; i < writing_count_; ++i) {
       release(out_.front()->size() + 1);
@@ -388,6 +382,25 @@ class NdjsonSession final : public rpc::Session,
     }
     do_write();
     do_read();  // reading may have paused on the queue
+  }
+
+  // The write deadline: one timer, armed when a write starts and none is pending, that
+  // re-arms itself while writes keep completing (most complete at once: arming and
+  // cancelling a timer for each would cost more than the write).
+  void arm_write_timer() {
+    if (write_timer_armed_ || closed_) return;
+    write_timer_armed_ = true;
+    write_timer_.expires_at(write_started_ + limits_.write_timeout);
+    write_timer_.async_wait([self = this->shared_from_this()](const error_code& ec) {
+      self->write_timer_armed_ = false;
+      if (ec || self->closed_ || !self->writing_) return;
+      if (Clock::now() - self->write_started_ >= self->limits_.write_timeout) {
+        self->slow_reader(fmt::format("a write did not complete within {} s (the peer does not read)",
+                                      std::chrono::duration<double>(self->limits_.write_timeout).count()));
+        return;
+      }
+      self->arm_write_timer();  // a later write is in progress: its own deadline
+    });
   }
 
   // One timer: a started message must complete within read_timeout; an idle connection
@@ -447,7 +460,8 @@ class NdjsonSession final : public rpc::Session,
   std::string buffer_;
   std::deque<std::shared_ptr<const std::string>> out_;
   std::size_t writing_count_ = 0;  // messages at the front of out_ being written
-  std::uint64_t write_gen_ = 0;
+  Clock::time_point write_started_;
+  bool write_timer_armed_ = false;
   std::atomic<std::size_t> queued_{0}, queued_bytes_{0};
   std::atomic<bool> closing_{false};
   bool reading_ = false, writing_ = false, closed_ = false, close_after_write_ = false;

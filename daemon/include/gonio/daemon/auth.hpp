@@ -5,6 +5,7 @@
 // timing says nothing about which hash matched or how much of it did.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <mutex>
@@ -57,6 +58,7 @@ class Auth {
   Store& store_;
   mutable std::mutex mu_;
   std::vector<TokenEntry> stored_;
+  std::atomic<std::uint64_t> revocations_{0};
 };
 
 }  // namespace gonio::daemon
