@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
@@ -147,8 +148,17 @@ std::string Auth::create(const std::string& name, Role role) {
 
 bool Auth::revoke(const std::string& name) {
   const bool removed = store_.delete_token(name);
+  if (removed) ++revocations_;
   reload();
   return removed;
+}
+
+bool Auth::still_valid(const Principal& p) const {
+  // Asked before every call: free until a token has been revoked.
+  if (revocations_.load(std::memory_order_relaxed) == 0 || p.name.starts_with("unix:")) return true;
+  std::lock_guard lock(mu_);
+  const auto same = [&](const TokenEntry& e) { return e.name == p.name && e.role == p.role; };
+  return std::ranges::any_of(configured_, same) || std::ranges::any_of(stored_, same);
 }
 
 std::vector<TokenEntry> Auth::list() const {

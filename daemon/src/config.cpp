@@ -308,6 +308,30 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
         r.optional_in<long long>("max_queue", static_cast<long long>(c.max_queue), 1, 1 << 20));
     c.max_connections = static_cast<std::size_t>(
         r.optional_in<long long>("max_connections", static_cast<long long>(c.max_connections), 1, 65536));
+    const auto size_in = [&](const char* key, std::size_t fallback, long long lo, long long hi) {
+      return static_cast<std::size_t>(r.optional_in<long long>(key, static_cast<long long>(fallback), lo, hi));
+    };
+    c.max_queue_bytes = size_in("max_queue_bytes", c.max_queue_bytes, 64 << 10, 1ll << 30);
+    c.max_buffered_bytes = size_in("max_buffered_bytes", c.max_buffered_bytes, 1 << 20, 16ll << 30);
+    c.write_timeout = seconds_in(r, "write_timeout_s", c.write_timeout, 0.1, 3600);
+    c.login_timeout = seconds_in(r, "login_timeout_s", c.login_timeout, 0.1, 3600);
+    c.max_in_flight = size_in("max_in_flight", c.max_in_flight, 1, 1024);
+    c.max_batch = size_in("max_batch", c.max_batch, 1, 100000);
+    c.max_response_bytes = size_in("max_response_bytes", c.max_response_bytes, 64 << 10, 1ll << 30);
+    if (const auto* o = r.raw("allowed_origins")) {
+      if (!o->is_array()) throw Error::invalid("server.allowed_origins", "expected an array of origins");
+      c.allowed_origins.clear();
+      for (std::size_t i = 0; i < o->size(); ++i) {
+        const auto field = fmt::format("server.allowed_origins[{}]", i);
+        auto origin = json_util::get_as<std::string>((*o)[i], field);
+        if (!(origin.starts_with("http://") || origin.starts_with("https://")) ||
+            origin.find('/', origin.find("//") + 2) != std::string::npos || origin.size() > 256)
+          throw Error::invalid(field, fmt::format("'{}' is not an origin (scheme://host[:port], no "
+                                                  "path)",
+                                                  origin));
+        c.allowed_origins.push_back(std::move(origin));
+      }
+    }
     c.log_level = r.optional<std::string>("log_level", c.log_level);
     if (c.log_level != "trace" && c.log_level != "debug" && c.log_level != "info" &&
         c.log_level != "warn" && c.log_level != "error")
@@ -319,6 +343,30 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
 
   if (const json auth = table(top, "auth"); !auth.empty()) {
     ObjectReader r(auth, "auth");
+    if (const auto* u = r.raw("unix")) {
+      ObjectReader ur(*u, "auth.unix");
+      const auto ids = [&](const char* key, std::optional<std::vector<std::uint32_t>>& out) {
+        const auto* v = ur.raw(key);
+        if (!v) return;
+        const auto field = ur.path(key);
+        if (!v->is_array()) throw Error::invalid(field, "expected an array of numeric ids");
+        std::vector<std::uint32_t> list;
+        for (std::size_t i = 0; i < v->size(); ++i) {
+          const auto f = fmt::format("{}[{}]", field, i);
+          const auto id = json_util::get_as<long long>((*v)[i], f);
+          if (id < 0 || id > 4294967294ll) throw Error::out_of_range(f, static_cast<double>(id), 0, 4294967294.0);
+          list.push_back(static_cast<std::uint32_t>(id));
+        }
+        out = std::move(list);
+      };
+      ids("admin_uids", c.unix_roles.admin_uids);
+      ids("admin_gids", c.unix_roles.admin_gids);
+      ids("technician_uids", c.unix_roles.technician_uids);
+      ids("technician_gids", c.unix_roles.technician_gids);
+      ids("viewer_uids", c.unix_roles.viewer_uids);
+      ids("viewer_gids", c.unix_roles.viewer_gids);
+      ur.finish();
+    }
     if (const auto* toks = r.raw("token")) {
       if (!toks->is_array()) throw Error::invalid("auth.token", "expected [[auth.token]] tables");
       c.tokens.clear();
@@ -405,6 +453,9 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
     c.twin_replicates = static_cast<int>(r.optional_in<long long>("replicates", c.twin_replicates, 4, 1024));
     c.twin_seed = static_cast<std::uint64_t>(
         r.optional_in<long long>("seed", static_cast<long long>(c.twin_seed), 0, (1ll << 62)));
+    c.twin_data_dir = r.optional<std::string>("data_dir", c.twin_data_dir);
+    if (!c.twin_data_dir.empty() && c.twin_data_dir.front() != '/')
+      throw Error::invalid("twin.data_dir", fmt::format("'{}' must be an absolute path", c.twin_data_dir));
     r.finish();
   }
 

@@ -2,6 +2,7 @@
 #include "gonio/daemon/daemon.hpp"
 
 #include <sys/stat.h>
+#include <malloc.h>
 #include <systemd/sd-daemon.h>
 #include <unistd.h>
 
@@ -185,6 +186,10 @@ int check_config(const DaemonOptions& o, std::ostream& out, std::ostream& err) {
 }
 
 int run_daemon(const DaemonOptions& o) {
+  // Large buffers (message lines, answers, exports) come from mmap and go back to the system
+  // when freed: glibc's adaptive threshold would otherwise move them into the heap after
+  // the first one, where a burst of hostile requests leaves the memory resident.
+  ::mallopt(M_MMAP_THRESHOLD, 256 << 10);
   ::umask(027);  // the store, its journal and endpoints.json: owner and group only
   Config config;
   try {
@@ -224,8 +229,19 @@ int run_daemon(const DaemonOptions& o) {
 
     asio::io_context io;
     asio::thread_pool workers(config.rpc_threads);
-    rpc::Dispatcher dispatcher([&workers](std::function<void()> f) { asio::post(workers, std::move(f)); });
+    // Control methods (pause, resume, cancel, reset) have threads of their own: a queue of
+    // exports on the workers cannot delay them.
+    asio::thread_pool control(2);
+    rpc::DispatchLimits dispatch_limits;
+    dispatch_limits.max_batch = config.max_batch;
+    dispatch_limits.max_response_bytes = config.max_response_bytes;
+    dispatch_limits.batch_window = config.max_in_flight;
+    rpc::Dispatcher dispatcher([&workers](std::function<void()> f) { asio::post(workers, std::move(f)); },
+                               [&control](std::function<void()> f) { asio::post(control, std::move(f)); },
+                               dispatch_limits);
+    dispatcher.set_principal_check([&auth](const Principal& p) { return auth.still_valid(p); });
 
+    net::NetStats net_stats;
     std::vector<std::shared_ptr<net::Listener>> listeners;
     Services services{config,     state,     *store,   auth,
                       hub,        twin,      alerts,   instrument,
@@ -234,11 +250,16 @@ int run_daemon(const DaemonOptions& o) {
                         json out = json::array();
                         for (const auto& l : listeners) out.push_back(l->stats());
                         return out;
-                      }};
+                      },
+                      [&net_stats] { return net_stats.to_json(); },
+                      [&listeners](const std::string& name) {
+                        for (const auto& l : listeners) l->end_sessions_of(name);
+                      },
+                      config.twin_data_dir.empty() ? state / "data" : fs::path(config.twin_data_dir)};
     register_methods(dispatcher, services);
 
     // ---- listeners: the state dir's socket always, then the configured ones.
-    const net::Context ctx{dispatcher, hub, auth, net::Limits::from(config)};
+    const net::Context ctx{dispatcher, hub, auth, net::Limits::from(config), net_stats};
     auto uris = config.listen;
     const auto default_sock = (state / "goniod.sock").string();
     if (std::none_of(uris.begin(), uris.end(), [&](const ListenUri& u) {
@@ -333,6 +354,7 @@ int run_daemon(const DaemonOptions& o) {
     for (auto& t : io_threads) t.join();
     if (stopper.joinable()) stopper.join();
     instrument.shutdown();
+    control.join();
     workers.join();
     alerts.set_sink(nullptr);
     store->audit("goniod", "daemon.stop", "", json::object());

@@ -21,13 +21,15 @@ namespace {
 
 std::string csv_number(double v) { return fmt::format("{:.9g}", v); }
 
-std::string to_csv(const Scan& scan, const std::vector<PointRecord>& points) {
+std::string to_csv(const Scan& scan, const std::vector<PointRecord>& points, bool header = true) {
   std::string out;
-  out += fmt::format("# gonio scan {} sample {} exported {}\n", scan.id, scan.plan.sample_id,
-                     utc::now());
-  out += "index,geometry_index,repeat,theta_i,phi_i,theta_r,phi_r,actual_theta_i,actual_theta_r,"
-         "wavelength_nm,measured,measured_u,predicted,predicted_se,z_max,delta_e00,diverged,"
-         "flags\n";
+  if (header) {
+    out += fmt::format("# gonio scan {} sample {} exported {}\n", scan.id, scan.plan.sample_id,
+                       utc::now());
+    out += "index,geometry_index,repeat,theta_i,phi_i,theta_r,phi_r,actual_theta_i,actual_theta_r,"
+           "wavelength_nm,measured,measured_u,predicted,predicted_se,z_max,delta_e00,diverged,"
+           "flags\n";
+  }
   for (const auto& p : points) {
     std::string flags;
     for (const auto& f : p.flags) flags += (flags.empty() ? "" : ";") + f;
@@ -147,6 +149,28 @@ ExportResult export_scan(const Scan& scan, const std::vector<PointRecord>& point
     throw Error::invalid("format", fmt::format("'{}' is not an export format (allowed: csv, json, "
                                                "bsdf, ssdd)",
                                                format));
+  }
+  return r;
+}
+
+ExportResult export_chunk(const Scan& scan, const std::vector<PointRecord>& points,
+                          std::string_view format, std::size_t offset, bool last) {
+  ExportResult r;
+  r.format = std::string(format);
+  r.filename = fmt::format("scan-{}.{}", scan.id, format);
+  if (format == "csv") {
+    r.media_type = "text/csv";
+    r.content = to_csv(scan, points, offset == 0);
+  } else if (format == "json") {
+    r.media_type = "application/json";
+    if (offset == 0) r.content = R"({"scan":)" + nlohmann::json(scan).dump() + R"(,"points":[)";
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (offset + i > 0) r.content += ',';
+      r.content += nlohmann::json(points[i]).dump();
+    }
+    if (last) r.content += "]}";
+  } else {
+    throw Error::invalid("format", fmt::format("'{}' is not exported in chunks (csv, json)", format));
   }
   return r;
 }

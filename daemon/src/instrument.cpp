@@ -71,6 +71,7 @@ void Instrument::start() {
     if (started_) return;
     started_ = true;
   }
+  restore_fault_latch();
   // A bad driver table is a configuration error: fail now, loudly. Absent devices are not:
   // the runner keeps trying.
   open_devices(true);
@@ -94,6 +95,32 @@ std::chrono::steady_clock::time_point Instrument::heartbeat() const {
 // Before every bounded wait of the runner thread, so that a healthy thread is never staler
 // than its longest single device call (a point makes several, homing one per axis).
 void Instrument::beat() { heartbeat_ns_ = Clock::now().time_since_epoch().count(); }
+
+void Instrument::restore_fault_latch() {
+  AlertFilter f;
+  f.acknowledged = false;
+  f.min_severity = Severity::critical;
+  f.limit = 1000;
+  for (const auto& a : store_.alerts(f)) {
+    if (a.kind != alert_kind::device_fault) continue;
+    std::lock_guard lock(mu_);
+    fault_latched_ = true;
+    fault_reason_ = fmt::format("{} (alert {}, unacknowledged since before this start)", a.message, a.id);
+    spdlog::warn("instrument: fault latched from alert {} ({}): nothing runs until a technician "
+                 "resumes a scan or resets the instrument",
+                 a.id, a.message);
+    return;  // the newest one names the fault
+  }
+}
+
+void Instrument::acknowledge_faults(const std::string& actor) {
+  AlertFilter f;
+  f.acknowledged = false;
+  f.min_severity = Severity::critical;
+  f.limit = 1000;
+  for (const auto& a : store_.alerts(f))
+    if (a.kind == alert_kind::device_fault) alerts_.ack(a.id, actor);
+}
 
 // ---- devices ---------------------------------------------------------------------------
 

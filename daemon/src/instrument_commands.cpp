@@ -97,6 +97,7 @@ Scan Instrument::resume(std::int64_t id, const std::string& actor) {
     fault_reason_.clear();
     if (auto_resume_ && auto_resume_->first == id) auto_resume_.reset();
   }
+  acknowledge_faults(actor);
   cv_.notify_all();
   return queued;
 }
@@ -260,6 +261,7 @@ json Instrument::reset(const std::string& actor) {
           l.wait = config_.reconnect_initial;
         }
     }
+    acknowledge_faults(actor);
     open_devices();
     cv_.notify_all();
     return status();

@@ -7,6 +7,7 @@
 
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <boost/asio/strand.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
@@ -30,10 +31,13 @@ namespace {
 
 constexpr std::size_t kHeaderLimit = 16 * 1024;
 
+class WsSession;
+
 struct HttpState {
   Context ctx;
   std::atomic<std::size_t> connections{0}, accepted{0}, dropped{0}, websockets{0};
   std::mutex mu;
+  std::vector<std::weak_ptr<WsSession>> ws;  // for ending the sessions of a revoked token
   // Who to close on shutdown; expired entries are pruned as new ones arrive.
   std::vector<std::pair<std::weak_ptr<void>, std::function<void()>>> closers;
   explicit HttpState(const Context& c) : ctx(c) {}
@@ -57,8 +61,40 @@ std::string bearer(beast::string_view header) {
   return token;
 }
 
-std::string error_body(int code, std::string_view msg, Errc errc) {
-  return json{{"jsonrpc", "2.0"}, {"error", rpc::error_object(code, msg, errc)}, {"id", nullptr}}.dump();
+std::string error_body(int code, std::string_view msg, Errc errc, std::string_view field = {}) {
+  return json{{"jsonrpc", "2.0"}, {"error", rpc::error_object(code, msg, errc, field)}, {"id", nullptr}}.dump();
+}
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  for (auto& ch : out) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return out;
+}
+
+// Whether a browser's Origin may talk to this listener: its own host (the Host header the
+// browser sent with it) or one of server.allowed_origins. "null" (sandboxed frames, files)
+// never may.
+bool origin_allowed(std::string_view origin, std::string_view host, const Limits& limits) {
+  const auto o = lower(origin);
+  for (const auto& a : limits.allowed_origins)
+    if (lower(a) == o) return true;
+  if (host.empty()) return false;
+  return o == "http://" + lower(host) || o == "https://" + lower(host);
+}
+
+bool listed_origin(std::string_view origin, const Limits& limits) {
+  const auto o = lower(origin);
+  for (const auto& a : limits.allowed_origins)
+    if (lower(a) == o) return true;
+  return false;
+}
+
+// "application/json" with optional parameters ("; charset=utf-8"), any case.
+bool is_json_media_type(std::string_view content_type) {
+  auto t = lower(content_type.substr(0, content_type.find(';')));
+  while (!t.empty() && t.back() == ' ') t.pop_back();
+  while (!t.empty() && t.front() == ' ') t.erase(0, 1);
+  return t == "application/json";
 }
 
 // A request over HTTP POST: no notifications can reach it.
@@ -75,11 +111,16 @@ class OneShot final : public rpc::Session {
 class WsSession final : public rpc::Session, public std::enable_shared_from_this<WsSession> {
  public:
   WsSession(tcp::socket socket, std::string peer, std::shared_ptr<HttpState> st)
-      : rpc::Session("ws", std::move(peer), true), ws_(std::move(socket)), st_(std::move(st)),
-        limits_(st_->ctx.limits) {
+      : rpc::Session("ws", std::move(peer), true), ws_(std::move(socket)),
+        read_timer_(ws_.get_executor()), write_timer_(ws_.get_executor()),
+        login_timer_(ws_.get_executor()), st_(std::move(st)), limits_(st_->ctx.limits),
+        stats_(st_->ctx.stats) {
     ++st_->websockets;
   }
-  ~WsSession() override { --st_->websockets; }
+  ~WsSession() override {
+    --st_->websockets;
+    stats_.buffered_bytes -= queued_bytes_.load();
+  }
 
   void start(http::request<http::string_body> req) {
     auto timeouts = websocket::stream_base::timeout::suggested(beast::role_type::server);
@@ -94,6 +135,20 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
     st_->add_closer(self, [w = std::weak_ptr<WsSession>(self)] {
       if (auto s = w.lock()) asio::post(s->ws_.get_executor(), [s] { s->close("the server is stopping"); });
     });
+    {
+      std::lock_guard lock(st_->mu);
+      std::erase_if(st_->ws, [](const auto& w) { return w.expired(); });
+      st_->ws.push_back(self);
+    }
+    if (principal().role == Role::none) {
+      login_timer_.expires_after(limits_.login_timeout);
+      login_timer_.async_wait([self](const error_code& ec) {
+        if (ec || self->closed_ || self->principal().role != Role::none) return;
+        ++self->stats_.login_timeouts;
+        self->close(fmt::format("did not log in within {} s",
+                                std::chrono::duration<double>(self->limits_.login_timeout).count()));
+      });
+    }
     ws_.async_accept(req, [self](const error_code& ec) {
       if (ec) {
         self->close(ec.message());
@@ -106,11 +161,9 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
 
   bool push(std::shared_ptr<const std::string> message) override {
     if (closed_flag_.load()) return false;
-    if (queued_.fetch_add(1) + 1 > limits_.max_queue) {
-      --queued_;
-      ++st_->dropped;
+    if (!admit(message->size())) {
       asio::post(ws_.get_executor(), [self = shared_from_this()] {
-        self->close("its outgoing queue is full (the peer does not read)");
+        self->slow_reader("its outgoing queue is full (the peer does not read)");
       });
       return false;
     }
@@ -120,11 +173,47 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
     return true;
   }
 
+  void end(const std::string& why) {
+    asio::post(ws_.get_executor(), [self = shared_from_this(), why] { self->close(why); });
+  }
+
  private:
+  // The same accounting as the NDJSON sessions (net_ndjson.cpp).
+  bool admit(std::size_t bytes, std::size_t extra_messages = 0) {
+    if (queued_.fetch_add(1) + 1 > limits_.max_queue + extra_messages) {
+      --queued_;
+      return false;
+    }
+    const auto mine = queued_bytes_.fetch_add(bytes) + bytes;
+    const auto all = stats_.buffered_bytes.fetch_add(bytes) + bytes;
+    const bool first_small = mine == bytes && bytes <= kReadPauseBytes;
+    if (mine > limits_.max_queue_bytes || (all > limits_.max_buffered_bytes && !first_small)) {
+      release(bytes);
+      return false;
+    }
+    return true;
+  }
+  void release(std::size_t bytes) {
+    --queued_;
+    queued_bytes_ -= bytes;
+    stats_.buffered_bytes -= bytes;
+  }
+  void slow_reader(const std::string& why) {
+    if (closed_) return;
+    ++stats_.slow_readers;
+    close(why);
+  }
+
+  bool may_read() const {
+    return !closed_ && in_flight_ < limits_.max_in_flight && queued_bytes_.load() <= kReadPauseBytes;
+  }
+
+  // Frames are read one at a time so that a message that has started must complete within
+  // read_timeout, as on NDJSON (Beast's own timeouts only cover idle peers).
   void do_read() {
-    if (reading_ || closed_ || in_flight_ >= limits_.max_in_flight) return;
+    if (reading_ || !may_read()) return;
     reading_ = true;
-    ws_.async_read(buffer_, [self = shared_from_this()](const error_code& ec, std::size_t) {
+    ws_.async_read_some(buffer_, limits_.max_message_bytes, [self = shared_from_this()](const error_code& ec, std::size_t) {
       self->reading_ = false;
       if (self->closed_) return;
       if (ec) {
@@ -136,28 +225,44 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
         self->close(ec == websocket::error::closed ? "" : ec.message());
         return;
       }
+      if (!self->ws_.is_message_done()) {
+        if (!self->message_started_) {
+          self->message_started_ = true;
+          self->read_timer_.expires_after(self->limits_.read_timeout);
+          self->read_timer_.async_wait([self](const error_code& e) {
+            if (e || self->closed_ || !self->message_started_) return;
+            self->close("read timeout (message never completed)");
+          });
+        }
+        self->do_read();
+        return;
+      }
+      self->message_started_ = false;
+      self->read_timer_.cancel();
       std::string text = beast::buffers_to_string(self->buffer_.data());
       self->buffer_.consume(self->buffer_.size());
-      ++self->in_flight_;
-      self->st_->ctx.dispatcher.handle(text, self, [self](std::string r) {
-        asio::post(self->ws_.get_executor(), [self, r = std::move(r)]() mutable {
-          --self->in_flight_;
+      self->buffer_.shrink_to_fit();
+      auto weight = std::make_shared<std::size_t>(1);
+      const auto w = self->st_->ctx.dispatcher.handle(text, self, [self, weight](std::string r) {
+        asio::post(self->ws_.get_executor(), [self, weight, r = std::move(r)]() mutable {
+          self->in_flight_ -= std::min(self->in_flight_, *weight);
           if (!r.empty()) self->enqueue(std::make_shared<const std::string>(std::move(r)), false);
           self->do_read();
         });
       });
+      *weight = w;  // before the posted reply can run: both are on this strand
+      self->in_flight_ += w;
       self->do_read();
     });
   }
 
   void enqueue(std::shared_ptr<const std::string> m, bool counted) {
     if (closed_) {
-      if (counted) --queued_;
+      if (counted) release(m->size());
       return;
     }
-    if (!counted && queued_.fetch_add(1) + 1 > limits_.max_queue + limits_.max_in_flight) {
-      --queued_;
-      close("its outgoing queue is full (the peer does not read)");
+    if (!counted && !admit(m->size(), limits_.max_in_flight)) {
+      slow_reader("its outgoing queue is full (the peer does not read its answers)");
       return;
     }
     out_.push_back(std::move(m));
@@ -167,16 +272,25 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
   void do_write() {
     if (writing_ || out_.empty() || closed_) return;
     writing_ = true;
+    const auto gen = ++write_gen_;
+    write_timer_.expires_after(limits_.write_timeout);
+    write_timer_.async_wait([self = shared_from_this(), gen](const error_code& ec) {
+      if (ec || self->closed_ || !self->writing_ || self->write_gen_ != gen) return;
+      self->slow_reader(fmt::format("a write did not complete within {} s (the peer does not read)",
+                                    std::chrono::duration<double>(self->limits_.write_timeout).count()));
+    });
     ws_.async_write(asio::buffer(*out_.front()), [self = shared_from_this()](const error_code& ec, std::size_t) {
       self->writing_ = false;
+      self->write_timer_.cancel();
       if (self->closed_) return;
+      self->release(self->out_.front()->size());
       self->out_.pop_front();
-      --self->queued_;
       if (ec) {
         self->close(ec.message());
         return;
       }
       self->do_write();
+      self->do_read();
     });
   }
 
@@ -186,19 +300,29 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
     closed_flag_ = true;
     if (!why.empty()) spdlog::info("ws {}: closing: {}", peer(), why);
     st_->ctx.hub.remove(id());
+    read_timer_.cancel();
+    write_timer_.cancel();
+    login_timer_.cancel();
     error_code ignored;
     beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
     beast::get_lowest_layer(ws_).close();
+    while (!out_.empty() && !writing_) {
+      release(out_.front()->size());
+      out_.pop_front();
+    }
   }
 
   websocket::stream<beast::tcp_stream> ws_;
+  asio::steady_timer read_timer_, write_timer_, login_timer_;
   std::shared_ptr<HttpState> st_;
   Limits limits_;
+  NetStats& stats_;
   beast::flat_buffer buffer_;
   std::deque<std::shared_ptr<const std::string>> out_;
-  std::atomic<std::size_t> queued_{0};
+  std::atomic<std::size_t> queued_{0}, queued_bytes_{0};
   std::atomic<bool> closed_flag_{false};
-  bool reading_ = false, writing_ = false, closed_ = false;
+  bool reading_ = false, writing_ = false, closed_ = false, message_started_ = false;
+  std::uint64_t write_gen_ = 0;
   std::size_t in_flight_ = 0;
 };
 
@@ -258,6 +382,25 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
     }
     auto req = parser_->release();
     const auto target = std::string(req.target());
+    const auto origin = std::string(req[http::field::origin]);
+    const auto host = std::string(req[http::field::host]);
+    // A browser names the page's origin: only the listener's own host and the configured
+    // origins may use the API from a page (a foreign page could otherwise drive the
+    // instrument through a browser on the lab PC).
+    if (req.find(http::field::origin) != req.end() && !origin_allowed(origin, host, limits_)) {
+      ++st_->ctx.stats.refused_origin;
+      spdlog::warn("http {}: refused a request from origin '{}'", peer_, origin);
+      return send(http::status::forbidden,
+                  error_body(rpc::code::forbidden,
+                             fmt::format("origin '{}' may not use this API (allowed: this host and "
+                                         "server.allowed_origins)",
+                                         origin),
+                             Errc::forbidden, "Origin"),
+                  false, req.version());
+    }
+    cors_origin_ = req.find(http::field::origin) != req.end() && listed_origin(origin, limits_) ? origin : "";
+    if (req.method() == http::verb::options && target == "/rpc" && !cors_origin_.empty())
+      return send(http::status::no_content, {}, req.keep_alive(), req.version(), false, "POST, OPTIONS");
     const auto token = bearer(req[http::field::authorization]);
     std::optional<Principal> who;
     if (!token.empty()) {
@@ -288,6 +431,17 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
       return send(http::status::method_not_allowed,
                   error_body(rpc::code::invalid_request, "use POST for /rpc", Errc::invalid_argument),
                   req.keep_alive(), req.version(), false, "POST");
+    // A form or a no-cors fetch cannot send application/json across origins without a
+    // preflight: requiring it keeps cross-origin simple requests out.
+    if (!is_json_media_type(std::string(req[http::field::content_type]))) {
+      ++st_->ctx.stats.refused_content_type;
+      return send(http::status::unsupported_media_type,
+                  error_body(rpc::code::invalid_request,
+                             fmt::format("Content-Type '{}' is not application/json",
+                                         std::string(req[http::field::content_type])),
+                             Errc::invalid_argument, "Content-Type"),
+                  false, req.version());
+    }
     Principal p;
     p.transport = "http";
     p.name = "anonymous";
@@ -297,8 +451,18 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
     const unsigned version = req.version();
     st_->ctx.dispatcher.handle(req.body(), session, [self = shared_from_this(), keep, version](std::string r) {
       asio::post(self->stream_.get_executor(), [self, keep, version, r = std::move(r)]() mutable {
-        if (r.empty()) self->send(http::status::no_content, {}, keep, version);
-        else self->send(http::status::ok, std::move(r), keep, version);
+        if (r.empty()) return self->send(http::status::no_content, {}, keep, version);
+        // The answer is held until written: it counts against the shared output budget.
+        auto& buffered = self->st_->ctx.stats.buffered_bytes;
+        if (buffered.load() + r.size() > self->limits_.max_buffered_bytes && r.size() > kReadPauseBytes)
+          return self->send(http::status::service_unavailable,
+                            error_body(rpc::code::overloaded,
+                                       fmt::format("goniod's output buffers are full (limit "
+                                                   "server.max_buffered_bytes = {}); retry later",
+                                                   self->limits_.max_buffered_bytes),
+                                       Errc::busy),
+                            false, version);
+        self->send(http::status::ok, std::move(r), keep, version);
       });
     });
   }
@@ -310,11 +474,24 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
     if (!body.empty()) res->set(http::field::content_type, "application/json");
     if (challenge) res->set(http::field::www_authenticate, "Bearer realm=\"goniod\"");
     if (allow) res->set(http::field::allow, allow);
+    if (!cors_origin_.empty()) {
+      res->set(http::field::access_control_allow_origin, cors_origin_);
+      res->set(http::field::vary, "Origin");
+      if (status == http::status::no_content && allow) {  // a preflight
+        res->set(http::field::access_control_allow_methods, "POST");
+        res->set(http::field::access_control_allow_headers, "Authorization, Content-Type");
+        res->set(http::field::access_control_max_age, "600");
+      }
+    }
     res->keep_alive(keep_alive);
     res->body() = std::move(body);
     res->prepare_payload();
-    stream_.expires_after(limits_.read_timeout);
-    http::async_write(stream_, *res, [self = shared_from_this(), res](const error_code& ec, std::size_t) {
+    const auto bytes = res->body().size();
+    st_->ctx.stats.buffered_bytes += bytes;
+    stream_.expires_after(limits_.write_timeout);
+    http::async_write(stream_, *res, [self = shared_from_this(), res, bytes](const error_code& ec, std::size_t) {
+      self->st_->ctx.stats.buffered_bytes -= bytes;
+      if (ec == beast::error::timeout) ++self->st_->ctx.stats.slow_readers;
       if (ec || !res->keep_alive()) return self->close();
       self->do_read();
     });
@@ -332,23 +509,39 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::string_body>> parser_;
   std::string peer_;
+  std::string cors_origin_;  // a listed Origin of the current request: CORS headers
 };
 
 class HttpListener final : public Listener, public std::enable_shared_from_this<HttpListener> {
  public:
   HttpListener(asio::io_context& io, tcp::acceptor acceptor, std::string endpoint,
                std::shared_ptr<HttpState> st)
-      : io_(io), acceptor_(std::move(acceptor)), endpoint_(std::move(endpoint)), st_(std::move(st)) {}
+      : io_(io), acceptor_(std::move(acceptor)), backoff_timer_(acceptor_.get_executor()),
+        endpoint_(std::move(endpoint)), st_(std::move(st)) {}
 
   void accept() {
     acceptor_.async_accept(asio::make_strand(io_), [self = shared_from_this()](const error_code& ec, tcp::socket s) {
       if (ec) {
-        if (ec != asio::error::operation_aborted) {
-          spdlog::warn("{}: accept: {}", self->endpoint_, ec.message());
-          self->accept();
+        if (ec == asio::error::operation_aborted || !self->acceptor_.is_open()) return;
+        if (ec == asio::error::no_descriptors || ec == boost::system::errc::too_many_files_open_in_system ||
+            ec == asio::error::no_buffer_space || ec == asio::error::no_memory) {
+          // Out of file descriptors: wait (100 ms, doubling to 2 s) instead of spinning.
+          ++self->st_->ctx.stats.accept_backoffs;
+          self->backoff_ = std::min(std::max(2 * self->backoff_, std::chrono::milliseconds(100)),
+                                    std::chrono::milliseconds(2000));
+          spdlog::warn("{}: accept: {}; retrying in {} ms", self->endpoint_, ec.message(),
+                       self->backoff_.count());
+          self->backoff_timer_.expires_after(self->backoff_);
+          self->backoff_timer_.async_wait([self](const error_code& e) {
+            if (!e) self->accept();
+          });
+          return;
         }
+        spdlog::warn("{}: accept: {}", self->endpoint_, ec.message());
+        self->accept();
         return;
       }
+      self->backoff_ = std::chrono::milliseconds(0);
       ++self->st_->accepted;
       if (self->st_->connections.load() + self->st_->websockets.load() >=
           self->st_->ctx.limits.max_connections) {
@@ -371,6 +564,7 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
     asio::post(acceptor_.get_executor(), [self = shared_from_this()] {
       error_code ignored;
       self->acceptor_.close(ignored);
+      self->backoff_timer_.cancel();
     });
     std::vector<std::pair<std::weak_ptr<void>, std::function<void()>>> closers;
     {
@@ -378,6 +572,21 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
       closers.swap(st_->closers);
     }
     for (auto& c : closers) c.second();
+  }
+
+  void end_sessions_of(const std::string& name) override {
+    std::vector<std::shared_ptr<WsSession>> live;
+    {
+      std::lock_guard lock(st_->mu);
+      for (auto& w : st_->ws)
+        if (auto s = w.lock()) live.push_back(std::move(s));
+    }
+    for (auto& s : live) {
+      const auto p = s->principal();
+      if (p.role == Role::none || p.name != name) continue;
+      ++st_->ctx.stats.revoked_sessions;
+      s->end(fmt::format("the token '{}' was revoked", name));
+    }
   }
 
   json stats() const override {
@@ -391,6 +600,8 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
  private:
   asio::io_context& io_;
   tcp::acceptor acceptor_;
+  asio::steady_timer backoff_timer_;
+  std::chrono::milliseconds backoff_{0};
   std::string endpoint_;
   std::shared_ptr<HttpState> st_;
 };

@@ -2,8 +2,11 @@
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/types.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <cerrno>
 #include <atomic>
 #include <deque>
 #include <filesystem>
@@ -38,7 +41,52 @@ Limits Limits::from(const Config& c) {
   l.idle_timeout = c.idle_timeout;
   l.max_queue = c.max_queue;
   l.max_connections = c.max_connections;
+  l.max_queue_bytes = c.max_queue_bytes;
+  l.max_buffered_bytes = c.max_buffered_bytes;
+  l.write_timeout = c.write_timeout;
+  l.login_timeout = c.login_timeout;
+  l.max_in_flight = c.max_in_flight;
+  l.allowed_origins = c.allowed_origins;
+  const auto& u = c.unix_roles;
+  l.admin_uids = u.admin_uids.value_or(std::vector<std::uint32_t>{0, ::geteuid()});
+  l.admin_gids = u.admin_gids.value_or(std::vector<std::uint32_t>{});
+  l.technician_uids = u.technician_uids.value_or(std::vector<std::uint32_t>{});
+  l.technician_gids = u.technician_gids.value_or(std::vector<std::uint32_t>{::getegid()});
+  l.viewer_uids = u.viewer_uids.value_or(std::vector<std::uint32_t>{});
+  l.viewer_gids = u.viewer_gids.value_or(std::vector<std::uint32_t>{});
   return l;
+}
+
+json NetStats::to_json() const {
+  return json{{"buffered_bytes", buffered_bytes.load()},
+              {"slow_readers_dropped", slow_readers.load()},
+              {"login_timeouts", login_timeouts.load()},
+              {"refused_origin", refused_origin.load()},
+              {"refused_content_type", refused_content_type.load()},
+              {"accept_backoffs", accept_backoffs.load()},
+              {"overload_dropped", overload_dropped.load()},
+              {"revoked_sessions_ended", revoked_sessions.load()}};
+}
+
+// The role of a Unix-socket peer from its uid and groups: the highest that any of them maps to.
+Role unix_role(const Limits& l, std::uint32_t uid, const std::vector<gid_t>& gids) {
+  const auto has = [](const std::vector<std::uint32_t>& v, std::uint32_t x) {
+    return std::find(v.begin(), v.end(), x) != v.end();
+  };
+  const auto any_gid = [&](const std::vector<std::uint32_t>& v) {
+    return std::any_of(gids.begin(), gids.end(), [&](gid_t g) { return has(v, g); });
+  };
+  if (has(l.admin_uids, uid) || any_gid(l.admin_gids)) return Role::admin;
+  if (has(l.technician_uids, uid) || any_gid(l.technician_gids)) return Role::technician;
+  if (has(l.viewer_uids, uid) || any_gid(l.viewer_gids)) return Role::viewer;
+  return Role::none;
+}
+
+// Whether an accept() failed for want of file descriptors: the listener then waits rather
+// than spinning on a backlog it cannot take.
+bool out_of_descriptors(const error_code& ec) {
+  return ec == asio::error::no_descriptors || ec == boost::system::errc::too_many_files_open_in_system ||
+         ec == asio::error::no_buffer_space || ec == asio::error::no_memory;
 }
 
 namespace {
@@ -61,23 +109,36 @@ class NdjsonSession final : public rpc::Session,
 
   NdjsonSession(Socket socket, std::string peer, std::shared_ptr<ListenerState> ls)
       : rpc::Session(ls->kind, std::move(peer), true), socket_(std::move(socket)),
-        timer_(socket_.get_executor()), ls_(std::move(ls)), limits_(ls_->ctx.limits) {}
+        timer_(socket_.get_executor()), write_timer_(socket_.get_executor()),
+        login_timer_(socket_.get_executor()), ls_(std::move(ls)), limits_(ls_->ctx.limits),
+        stats_(ls_->ctx.stats) {}
 
-  ~NdjsonSession() override { --ls_->connections; }
+  ~NdjsonSession() override {
+    --ls_->connections;
+    stats_.buffered_bytes -= queued_bytes_.load() + input_accounted_;
+  }
 
   void start() {
     last_activity_ = Clock::now();
+    if (principal().role == Role::none) {
+      // A peer without a role can only log in: it gets login_timeout to do so.
+      login_timer_.expires_after(limits_.login_timeout);
+      login_timer_.async_wait([self = this->shared_from_this()](const error_code& ec) {
+        if (ec || self->closed_ || self->principal().role != Role::none) return;
+        ++self->stats_.login_timeouts;
+        self->close(fmt::format("did not log in within {} s",
+                                std::chrono::duration<double>(self->limits_.login_timeout).count()));
+      });
+    }
     arm_timer();
     do_read();
   }
 
   bool push(std::shared_ptr<const std::string> message) override {
     if (closing_.load()) return false;
-    if (queued_.fetch_add(1) + 1 > limits_.max_queue) {
-      --queued_;
-      ++ls_->dropped;
+    if (!admit(message->size() + 1)) {
       asio::post(socket_.get_executor(), [self = this->shared_from_this()] {
-        self->close("its outgoing queue is full (the peer does not read)");
+        self->slow_reader("its outgoing queue is full (the peer does not read)");
       });
       return false;
     }
@@ -91,10 +152,60 @@ class NdjsonSession final : public rpc::Session,
     asio::post(socket_.get_executor(), [self = this->shared_from_this()] { self->close("the server is stopping"); });
   }
 
+  void end(const std::string& why) {
+    asio::post(socket_.get_executor(), [self = this->shared_from_this(), why] { self->close(why); });
+  }
+
  private:
+  // Reserves room for `bytes` in this connection's queue and in the shared budget: false
+  // when the queue would pass max_queue messages or max_queue_bytes, or all connections
+  // together max_buffered_bytes (then the peer is dropped: it is not reading).
+  bool admit(std::size_t bytes, std::size_t extra_messages = 0) {
+    if (queued_.fetch_add(1) + 1 > limits_.max_queue + extra_messages) {
+      --queued_;
+      return false;
+    }
+    const auto mine = queued_bytes_.fetch_add(bytes) + bytes;
+    const auto all = stats_.buffered_bytes.fetch_add(bytes) + bytes;
+    // A connection with nothing queued may always have one message of a modest size, so
+    // that a flood elsewhere cannot starve it of small answers.
+    const bool first_small = mine == bytes && bytes <= kReadPauseBytes;
+    if (mine > limits_.max_queue_bytes || (all > limits_.max_buffered_bytes && !first_small)) {
+      --queued_;
+      queued_bytes_ -= bytes;
+      stats_.buffered_bytes -= bytes;
+      return false;
+    }
+    return true;
+  }
+
+  // Keeps the shared budget's count of this connection's unparsed input up to date.
+  void account_input() {
+    const auto now = buffer_.size();
+    if (now >= input_accounted_) stats_.buffered_bytes += now - input_accounted_;
+    else stats_.buffered_bytes -= input_accounted_ - now;
+    input_accounted_ = now;
+  }
+
+  void release(std::size_t bytes) {
+    --queued_;
+    queued_bytes_ -= bytes;
+    stats_.buffered_bytes -= bytes;
+  }
+
+  bool may_read() const {
+    return !closed_ && !close_after_write_ && in_flight_ < limits_.max_in_flight &&
+           queued_bytes_.load() <= kReadPauseBytes;
+  }
+
   void do_read() {
-    if (reading_ || closed_ || close_after_write_) return;
-    if (in_flight_ >= limits_.max_in_flight) return;  // resumed when replies come back
+    if (reading_ || !may_read()) return;
+    // Complete lines left over from a pause are handled before anything new is read.
+    if (buffer_.find('\n') != std::string::npos) {
+      handle_lines();
+      if (!may_read() || reading_) return;
+    }
+    arm_timer();
     reading_ = true;
     socket_.async_read_some(asio::buffer(chunk_), [self = this->shared_from_this()](
                                                       const error_code& ec, std::size_t n) {
@@ -112,12 +223,34 @@ class NdjsonSession final : public rpc::Session,
     last_activity_ = Clock::now();
     if (buffer_.empty() && n > 0) partial_since_ = last_activity_;
     buffer_.append(chunk_.data(), n);
+    account_input();
+    handle_lines();
+    if (closed_) return;
+    // Unfinished lines count against the same budget as answers: many peers each sending
+    // most of a maximal line cannot together take more than it.
+    if (buffer_.size() > kReadPauseBytes && stats_.buffered_bytes.load() > limits_.max_buffered_bytes) {
+      ++stats_.overload_dropped;
+      close("goniod's buffers are full (server.max_buffered_bytes) and this peer sends a large message");
+      return;
+    }
+    if (buffer_.size() > limits_.max_message_bytes && buffer_.find('\n') == std::string::npos) {
+      too_large();
+      return;
+    }
+    arm_timer();
+    do_read();
+  }
+
+  // Dispatches the complete lines in the buffer while the connection may take more work;
+  // the rest stays buffered until replies have gone out.
+  void handle_lines() {
     std::size_t start = 0;
-    for (;;) {
+    while (may_read()) {
       const auto nl = buffer_.find('\n', start);
       if (nl == std::string::npos) break;
       std::string_view line(buffer_.data() + start, nl - start);
       if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+      start = nl + 1;
       if (line.size() > limits_.max_message_bytes) {
         too_large();
         return;
@@ -126,30 +259,29 @@ class NdjsonSession final : public rpc::Session,
         dispatch(line);
         if (closed_) return;
       }
-      start = nl + 1;
     }
+    if (start == 0) return;
     buffer_.erase(0, start);
-    if (buffer_.size() > limits_.max_message_bytes) {
-      too_large();
-      return;
-    }
-    if (!buffer_.empty() && start > 0) partial_since_ = Clock::now();
-    arm_timer();
-    do_read();
+    if (buffer_.empty() && buffer_.capacity() > kReadPauseBytes) buffer_.shrink_to_fit();  // a 1 MB line does not stay allocated
+    else partial_since_ = Clock::now();
+    account_input();
   }
 
   void too_large() {
     spdlog::warn("{} {}: message larger than {} bytes; closing", transport(), peer(),
                  limits_.max_message_bytes);
     buffer_.clear();
+    buffer_.shrink_to_fit();
+    account_input();
     enqueue(std::make_shared<const std::string>(
-        json{{"jsonrpc", "2.0"},
-             {"error", rpc::error_object(rpc::code::invalid_request,
-                                         fmt::format("message exceeds the limit of {} bytes",
-                                                     limits_.max_message_bytes),
-                                         Errc::out_of_range)},
-             {"id", nullptr}}
-            .dump()));
+                json{{"jsonrpc", "2.0"},
+                     {"error", rpc::error_object(rpc::code::invalid_request,
+                                                 fmt::format("message exceeds the limit of {} bytes",
+                                                             limits_.max_message_bytes),
+                                                 Errc::out_of_range)},
+                     {"id", nullptr}}
+                    .dump()),
+            false);
     close_after_write_ = true;
     if (!writing_) close("");
   }
@@ -161,48 +293,54 @@ class NdjsonSession final : public rpc::Session,
     struct Handoff {
       std::atomic<int> state{0};  // 0: in handle(), 1: replied inside it, 2: handle() returned
       std::string text;
+      std::size_t weight = 1;
     };
-    ++in_flight_;
     auto h = std::make_shared<Handoff>();
-    ls_->ctx.dispatcher.handle(line, this->shared_from_this(),
-                               [self = this->shared_from_this(), h](std::string response) {
-                                 h->text = std::move(response);
-                                 int inside = 0;
-                                 if (h->state.compare_exchange_strong(inside, 1)) return;
-                                 asio::post(self->socket_.get_executor(), [self, h] {
-                                   self->on_reply(std::move(h->text));
-                                   self->do_read();
-                                 });
-                               });
+    const auto weight = ls_->ctx.dispatcher.handle(
+        line, this->shared_from_this(), [self = this->shared_from_this(), h](std::string response) {
+          h->text = std::move(response);
+          int inside = 0;
+          if (h->state.compare_exchange_strong(inside, 1)) return;
+          asio::post(self->socket_.get_executor(), [self, h] {
+            self->on_reply(std::move(h->text), h->weight);
+            self->do_read();
+          });
+        });
+    // Batch elements count one each: a batch takes as much of max_in_flight as its size.
+    h->weight = weight;
+    in_flight_ += weight;
     int inside = 0;
     // on_read() resumes reading after its last line.
-    if (!h->state.compare_exchange_strong(inside, 2)) on_reply(std::move(h->text));
+    if (!h->state.compare_exchange_strong(inside, 2)) on_reply(std::move(h->text), weight);
   }
 
-  void on_reply(std::string r) {
-    --in_flight_;
+  void on_reply(std::string r, std::size_t weight) {
+    in_flight_ -= std::min(in_flight_, weight);
     if (!r.empty()) enqueue(std::make_shared<const std::string>(std::move(r)), false);
   }
 
   // On the strand. `counted` says whether push() already counted the message.
   void enqueue(std::shared_ptr<const std::string> m, bool counted = true) {
     if (closed_) {
-      if (counted) --queued_;
+      if (counted) release(m->size() + 1);
       return;
     }
-    if (!counted) {
-      if (queued_.fetch_add(1) + 1 > limits_.max_queue + limits_.max_in_flight) {
-        --queued_;
-        close("its outgoing queue is full (the peer does not read)");
-        return;
-      }
+    if (!counted && !admit(m->size() + 1, limits_.max_in_flight)) {
+      slow_reader("its outgoing queue is full (the peer does not read its answers)");
+      return;
     }
     out_.push_back(std::move(m));
     do_write();
   }
 
+  void slow_reader(const std::string& why) {
+    if (closed_) return;
+    ++stats_.slow_readers;
+    close(why);
+  }
+
   // Everything queued goes out in one gathered write (replies and notifications that piled
-  // up while the previous write was in flight).
+  // up while the previous write was in flight), with a deadline.
   void do_write() {
     if (writing_ || out_.empty() || closed_) return;
     writing_ = true;
@@ -211,6 +349,8 @@ class NdjsonSession final : public rpc::Session,
     const auto done = [self = this->shared_from_this()](const error_code& ec, std::size_t) {
       self->on_written(ec);
     };
+    write_started_ = Clock::now();
+    arm_write_timer();
     if (writing_count_ == 1) {
       const std::array<asio::const_buffer, 2> bufs{asio::buffer(*out_.front()), asio::buffer("\n", 1)};
       asio::async_write(socket_, bufs, done);
@@ -228,8 +368,10 @@ class NdjsonSession final : public rpc::Session,
   void on_written(const error_code& ec) {
     writing_ = false;
     if (closed_) return;
-    out_.erase(out_.begin(), out_.begin() + static_cast<std::ptrdiff_t>(writing_count_));
-    queued_ -= writing_count_;
+    for (std::size_t i = 0; i < writing_count_; ++i) {
+      release(out_.front()->size() + 1);
+      out_.pop_front();
+    }
     if (ec) {
       close(ec.message());
       return;
@@ -239,6 +381,26 @@ class NdjsonSession final : public rpc::Session,
       return;
     }
     do_write();
+    do_read();  // reading may have paused on the queue
+  }
+
+  // The write deadline: one timer, armed when a write starts and none is pending, that
+  // re-arms itself while writes keep completing (most complete at once: arming and
+  // cancelling a timer for each would cost more than the write).
+  void arm_write_timer() {
+    if (write_timer_armed_ || closed_) return;
+    write_timer_armed_ = true;
+    write_timer_.expires_at(write_started_ + limits_.write_timeout);
+    write_timer_.async_wait([self = this->shared_from_this()](const error_code& ec) {
+      self->write_timer_armed_ = false;
+      if (ec || self->closed_ || !self->writing_) return;
+      if (Clock::now() - self->write_started_ >= self->limits_.write_timeout) {
+        self->slow_reader(fmt::format("a write did not complete within {} s (the peer does not read)",
+                                      std::chrono::duration<double>(self->limits_.write_timeout).count()));
+        return;
+      }
+      self->arm_write_timer();  // a later write is in progress: its own deadline
+    });
   }
 
   // One timer: a started message must complete within read_timeout; an idle connection
@@ -257,6 +419,9 @@ class NdjsonSession final : public rpc::Session,
     timer_.async_wait([self = this->shared_from_this()](const error_code& ec) {
       if (ec || self->closed_) return;
       if (Clock::now() < self->deadline_) return;  // re-armed meanwhile
+      // Complete lines waiting for replies to drain are not a stalled peer (the write
+      // deadline covers one that does not read).
+      if (!self->buffer_.empty() && self->buffer_.find('\n') != std::string::npos) return;
       self->close(self->buffer_.empty() ? "idle timeout" : "read timeout (message never completed)");
     });
   }
@@ -271,23 +436,37 @@ class NdjsonSession final : public rpc::Session,
     }
     error_code ignored;
     timer_.cancel();
+    write_timer_.cancel();
+    login_timer_.cancel();
     socket_.shutdown(Socket::shutdown_both, ignored);
     socket_.close(ignored);
     ls_->ctx.hub.remove(id());
+    // What is queued is freed now, not when the last handler lets go of the session.
+    while (!out_.empty() && !writing_) {
+      release(out_.front()->size() + 1);
+      out_.pop_front();
+    }
+    buffer_.clear();
+    buffer_.shrink_to_fit();
+    account_input();
   }
 
   Socket socket_;
-  asio::steady_timer timer_;
+  asio::steady_timer timer_, write_timer_, login_timer_;
   std::shared_ptr<ListenerState> ls_;
   Limits limits_;
+  NetStats& stats_;
   std::array<char, 16384> chunk_{};
   std::string buffer_;
   std::deque<std::shared_ptr<const std::string>> out_;
   std::size_t writing_count_ = 0;  // messages at the front of out_ being written
-  std::atomic<std::size_t> queued_{0};
+  Clock::time_point write_started_;
+  bool write_timer_armed_ = false;
+  std::atomic<std::size_t> queued_{0}, queued_bytes_{0};
   std::atomic<bool> closing_{false};
   bool reading_ = false, writing_ = false, closed_ = false, close_after_write_ = false;
   std::size_t in_flight_ = 0;
+  std::size_t input_accounted_ = 0;  // bytes of buffer_ counted in stats_.buffered_bytes
   Clock::time_point partial_since_, last_activity_, deadline_;
 };
 
@@ -299,22 +478,52 @@ class NdjsonListener final : public Listener,
 
   NdjsonListener(asio::io_context& io, Acceptor acceptor, std::string endpoint,
                  std::shared_ptr<ListenerState> ls)
-      : io_(io), acceptor_(std::move(acceptor)), endpoint_(std::move(endpoint)), ls_(std::move(ls)) {}
+      : io_(io), acceptor_(std::move(acceptor)), backoff_timer_(acceptor_.get_executor()),
+        endpoint_(std::move(endpoint)), ls_(std::move(ls)) {}
 
   void accept() {
     acceptor_.async_accept(asio::make_strand(io_), [self = this->shared_from_this()](
                                                        const error_code& ec,
                                                        typename Protocol::socket socket) {
       if (ec) {
-        if (ec != asio::error::operation_aborted) {
-          spdlog::warn("{}: accept: {}", self->endpoint_, ec.message());
-          self->accept();
+        if (ec == asio::error::operation_aborted || !self->acceptor_.is_open()) return;
+        if (out_of_descriptors(ec)) {
+          // Out of file descriptors: wait (100 ms, doubling to 2 s) instead of spinning.
+          ++self->ls_->ctx.stats.accept_backoffs;
+          self->backoff_ = std::min(std::max(2 * self->backoff_, std::chrono::milliseconds(100)),
+                                    std::chrono::milliseconds(2000));
+          spdlog::warn("{}: accept: {}; retrying in {} ms", self->endpoint_, ec.message(),
+                       self->backoff_.count());
+          self->backoff_timer_.expires_after(self->backoff_);
+          self->backoff_timer_.async_wait([self](const error_code& e) {
+            if (!e) self->accept();
+          });
+          return;
         }
+        spdlog::warn("{}: accept: {}", self->endpoint_, ec.message());
+        self->accept();
         return;
       }
+      self->backoff_ = std::chrono::milliseconds(0);
       self->on_accept(std::move(socket));
       self->accept();
     });
+  }
+
+  void end_sessions_of(const std::string& name) override {
+    std::vector<std::shared_ptr<rpc::Session>> live;
+    {
+      std::lock_guard lock(ls_->mu);
+      for (auto& w : ls_->sessions)
+        if (auto s = w.lock()) live.push_back(std::move(s));
+    }
+    for (auto& s : live) {
+      const auto p = s->principal();
+      if (p.role == Role::none || p.name != name) continue;
+      ++ls_->ctx.stats.revoked_sessions;
+      std::static_pointer_cast<NdjsonSession<Protocol>>(s)->end(
+          fmt::format("the token '{}' was revoked", name));
+    }
   }
 
   std::string endpoint() const override { return endpoint_; }
@@ -323,6 +532,7 @@ class NdjsonListener final : public Listener,
     asio::post(acceptor_.get_executor(), [self = this->shared_from_this()] {
       error_code ignored;
       self->acceptor_.close(ignored);
+      self->backoff_timer_.cancel();
     });
     std::vector<std::weak_ptr<rpc::Session>> sessions;
     {
@@ -368,11 +578,21 @@ class NdjsonListener final : public Listener,
     if constexpr (std::is_same_v<Protocol, asio::local::stream_protocol>) {
       ucred cred{};
       socklen_t len = sizeof cred;
-      if (getsockopt(socket.native_handle(), SOL_SOCKET, SO_PEERCRED, &cred, &len) == 0)
-        peer = fmt::format("uid={} pid={}", cred.uid, cred.pid);
-      // The socket's file mode is the local gate: whoever can open it is trusted.
+      const bool known = getsockopt(socket.native_handle(), SOL_SOCKET, SO_PEERCRED, &cred, &len) == 0;
+      if (known) peer = fmt::format("uid={} pid={}", cred.uid, cred.pid);
+      // The socket's file mode lets the peer in; its uid and groups give it a role
+      // ([auth.unix]): a lab member in the socket's group is a technician, not an admin.
+      std::vector<gid_t> groups(64);
+      socklen_t glen = static_cast<socklen_t>(groups.size() * sizeof(gid_t));
+      if (getsockopt(socket.native_handle(), SOL_SOCKET, SO_PEERGROUPS, groups.data(), &glen) != 0 && errno == ERANGE) {
+        groups.resize(glen / sizeof(gid_t) + 1);
+        glen = static_cast<socklen_t>(groups.size() * sizeof(gid_t));
+        if (getsockopt(socket.native_handle(), SOL_SOCKET, SO_PEERGROUPS, groups.data(), &glen) != 0) glen = 0;
+      }
+      groups.resize(glen / sizeof(gid_t));
+      if (known) groups.push_back(cred.gid);
       principal.name = fmt::format("unix:uid={}", cred.uid);
-      principal.role = Role::admin;
+      principal.role = known ? unix_role(ls_->ctx.limits, cred.uid, groups) : Role::none;
     } else {
       error_code ec;
       // Every reply is one write: Nagle would only hold back the tail of a large one.
@@ -394,6 +614,8 @@ class NdjsonListener final : public Listener,
 
   asio::io_context& io_;
   Acceptor acceptor_;
+  asio::steady_timer backoff_timer_;
+  std::chrono::milliseconds backoff_{0};
   std::string endpoint_;
   std::shared_ptr<ListenerState> ls_;
 };

@@ -16,11 +16,21 @@ namespace {
 
 constexpr std::size_t kMaxDepth = 64;
 
-// Nesting depth of a JSON text (brackets outside strings), so that a hostile message cannot
-// drive a recursive walk deep; stops counting past `limit`.
-std::size_t nesting_depth(std::string_view text, std::size_t limit) {
-  std::size_t depth = 0, max_depth = 0;
-  bool in_string = false, escape = false;
+// What a message holds, read from its text before it is parsed, so that a hostile message is
+// refused before it costs memory: nesting depth (stops counting past the limit), whether it
+// is a batch and its elements, and a count of JSON values (brackets, strings and commas: an
+// upper bound of the parsed tree's nodes give or take one per container).
+struct Shape {
+  std::size_t max_depth = 0;
+  bool batch = false;
+  std::size_t elements = 0;  // top-level elements of a batch
+  std::size_t values = 0;
+};
+
+Shape shape_of(std::string_view text, std::size_t depth_limit) {
+  Shape s;
+  std::size_t depth = 0;
+  bool in_string = false, escape = false, seen_top = false, batch_has_value = false;
   for (char c : text) {
     if (in_string) {
       if (escape) escape = false;
@@ -28,15 +38,28 @@ std::size_t nesting_depth(std::string_view text, std::size_t limit) {
       else if (c == '"') in_string = false;
       continue;
     }
-    if (c == '"') in_string = true;
-    else if (c == '[' || c == '{') {
-      max_depth = std::max(max_depth, ++depth);
-      if (max_depth > limit) return max_depth;
-    } else if ((c == ']' || c == '}') && depth > 0) {
-      --depth;
+    if (c == ' ' || c == '\t' || c == '\n' || c == '\r') continue;
+    if (!seen_top) {
+      seen_top = true;
+      s.batch = c == '[';
+    }
+    if (s.batch && depth == 1 && c != ']' && c != ',') batch_has_value = true;
+    if (c == '"') {
+      in_string = true;
+      ++s.values;
+    } else if (c == '[' || c == '{') {
+      ++s.values;
+      s.max_depth = std::max(s.max_depth, ++depth);
+      if (s.max_depth > depth_limit) return s;
+    } else if (c == ']' || c == '}') {
+      if (depth > 0) --depth;
+    } else if (c == ',') {
+      ++s.values;
+      if (s.batch && depth == 1) ++s.elements;
     }
   }
-  return max_depth;
+  if (s.batch && batch_has_value) ++s.elements;  // elements = commas + 1 when not empty
+  return s;
 }
 
 json error_response(const json& id, json error) {
@@ -83,12 +106,16 @@ json response(const json& id, json result) {
 
 std::string response_text(const json& id, Result result) {
   // Spliced rather than built as one more JSON object around the result.
-  std::string body = std::holds_alternative<json>(result) ? std::get<json>(result).dump(-1, ' ', false, kInvalidUtf8)
-                                                           : std::move(std::get<RawJson>(result).text);
+  std::string body;
+  const std::string* text = &body;
+  if (std::holds_alternative<json>(result)) body = std::get<json>(result).dump(-1, ' ', false, kInvalidUtf8);
+  else if (auto& raw = std::get<RawJson>(result); raw.shared) text = raw.shared.get();
+  else body = std::move(raw.text);
   std::string out;
-  out.reserve(body.size() + 48);
+  out.reserve(text->size() + 48);
   out += R"({"jsonrpc":"2.0","result":)";
-  out += body;
+  out += *text;
+  body = std::string();
   out += R"(,"id":)";
   out += id.dump(-1, ' ', false, kInvalidUtf8);
   out += '}';
@@ -122,14 +149,24 @@ void Session::set_principal(Principal p) {
 
 // ---- dispatcher --------------------------------------------------------------------------
 
+// A batch in progress: the parsed message lives here until every element has answered;
+// elements start at most `window` at a time (the rest wait for a slot), and the answers are
+// collected in request order within the response size limit.
 struct Dispatcher::Pending {
   std::mutex mu;
+  json message;
+  std::vector<json> ids;  // each element's id (null when unusable), for errors in its place
   std::vector<std::optional<std::string>> slots;
-  std::size_t remaining = 0;
+  std::vector<char> done;  // per element: answered (a notification answers with nothing)
+  std::string out;         // the answers so far, in request order: slots are moved in as
+                           // soon as every earlier element has answered
+  std::size_t next = 0, running = 0, remaining = 0, bytes = 2, flushed = 0;
+  bool pumping = false;
   std::function<void(std::string)> reply;
 };
 
-Dispatcher::Dispatcher(Executor blocking) : blocking_(std::move(blocking)) {}
+Dispatcher::Dispatcher(Executor blocking, Executor control, DispatchLimits limits)
+    : blocking_(std::move(blocking)), control_(std::move(control)), limits_(limits) {}
 
 void Dispatcher::add(Method m) {
   const auto name = m.name;
@@ -144,60 +181,128 @@ std::vector<std::string> Dispatcher::names() const {
   return out;
 }
 
-void Dispatcher::handle(std::string_view text, const std::shared_ptr<Session>& session,
-                        std::function<void(std::string)> reply) const {
-  json message;
-  if (nesting_depth(text, kMaxDepth) > kMaxDepth) {
+namespace {
+
+std::string too_large_text(const json& id, std::size_t bytes, std::size_t limit) {
+  return error_response(id, error_object(code::unsupported,
+                                         fmt::format("the response would have {} bytes, more than "
+                                                     "server.max_response_bytes = {}; ask for less "
+                                                     "(a smaller page or batch)",
+                                                     bytes, limit),
+                                         Errc::unsupported))
+      .dump(-1, ' ', false, kInvalidUtf8);
+}
+
+}  // namespace
+
+std::size_t Dispatcher::handle(std::string_view text, const std::shared_ptr<Session>& session,
+                               std::function<void(std::string)> reply) const {
+  const auto refuse = [&](int c, std::string message, Errc errc) {
     ++errors_;
-    reply(error_response(nullptr, error_object(code::invalid_request,
-                                               fmt::format("message nests deeper than {} levels",
-                                                           kMaxDepth),
-                                               Errc::invalid_argument))
-              .dump(-1, ' ', false, kInvalidUtf8));
-    return;
-  }
+    reply(error_response(nullptr, error_object(c, message, errc)).dump(-1, ' ', false, kInvalidUtf8));
+    return std::size_t{1};
+  };
+  const Shape shape = shape_of(text, kMaxDepth);
+  if (shape.max_depth > kMaxDepth)
+    return refuse(code::invalid_request, fmt::format("message nests deeper than {} levels", kMaxDepth),
+                  Errc::invalid_argument);
+  if (shape.batch && shape.elements > limits_.max_batch)
+    return refuse(code::invalid_request,
+                  fmt::format("a batch has {} elements, more than server.max_batch = {}",
+                              shape.elements, limits_.max_batch),
+                  Errc::out_of_range);
+  if (shape.values > limits_.max_values)
+    return refuse(code::invalid_request,
+                  fmt::format("the message holds {} JSON values, more than the limit of {}",
+                              shape.values, limits_.max_values),
+                  Errc::out_of_range);
+  json message;
   try {
     message = json::parse(text);
   } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1E400
-    ++errors_;
-    reply(error_response(nullptr, error_object(code::parse_error,
-                                               fmt::format("parse error: {}", e.what()),
-                                               Errc::parse_error))
-              .dump(-1, ' ', false, kInvalidUtf8));
-    return;
+    return refuse(code::parse_error, fmt::format("parse error: {}", e.what()), Errc::parse_error);
   }
   if (message.is_array()) {
-    if (message.empty()) {
-      ++errors_;
-      reply(error_response(nullptr, error_object(code::invalid_request, "empty batch",
-                                                 Errc::invalid_argument))
-                .dump(-1, ' ', false, kInvalidUtf8));
-      return;
-    }
+    if (message.empty()) return refuse(code::invalid_request, "empty batch", Errc::invalid_argument);
+    const std::size_t n = message.size();
     auto pending = std::make_shared<Pending>();
-    pending->slots.resize(message.size());
-    pending->remaining = message.size();
-    pending->reply = std::move(reply);
-    for (std::size_t i = 0; i < message.size(); ++i) {
-      handle_one(message[i], session, [pending, i](std::optional<std::string> r) {
-        std::function<void(std::string)> finish;
-        {
-          std::lock_guard lock(pending->mu);
-          pending->slots[i] = std::move(r);
-          if (--pending->remaining == 0) finish = std::move(pending->reply);
-        }
-        if (!finish) return;
-        std::string out;
-        for (auto& s : pending->slots)
-          if (s) out += (out.empty() ? "[" : ",") + *s;
-        finish(out.empty() ? std::string() : out + "]");
-      });
+    pending->message = std::move(message);
+    pending->slots.resize(n);
+    pending->done.resize(n, 0);
+    pending->ids.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& e = pending->message[i];
+      if (const auto it = e.is_object() ? e.find("id") : e.end();
+          e.is_object() && it != e.end() && (it->is_string() || it->is_number()))
+        pending->ids[i] = *it;
     }
-    return;
+    pending->remaining = n;
+    pending->reply = std::move(reply);
+    pump(pending, session);
+    return n;
   }
-  handle_one(message, session, [reply = std::move(reply)](std::optional<std::string> r) {
+  const auto limit = limits_.max_response_bytes;
+  handle_one(message, session, [this, reply = std::move(reply), limit,
+                                id = message.is_object() && message.contains("id") ? message["id"] : json(nullptr)](
+                                   std::optional<std::string> r) {
+    if (r && r->size() > limit) {
+      ++errors_;
+      r = too_large_text(id.is_string() || id.is_number() ? id : json(nullptr), r->size(), limit);
+    }
     reply(r ? std::move(*r) : std::string());
   });
+  return 1;
+}
+
+// Starts waiting elements while the window has room. Re-entrant calls (an element that
+// answers at once) only mark that more may start; the outermost call loops, so a long batch
+// of quick methods does not recurse.
+void Dispatcher::pump(const std::shared_ptr<Pending>& p, const std::shared_ptr<Session>& session) const {
+  std::unique_lock lock(p->mu);
+  if (p->pumping) return;
+  p->pumping = true;
+  const std::size_t window = std::max<std::size_t>(1, limits_.batch_window);
+  while (p->next < p->slots.size() && p->running < window) {
+    const std::size_t i = p->next++;
+    ++p->running;
+    lock.unlock();
+    handle_one(p->message[i], session, [this, p, i, session](std::optional<std::string> r) {
+      std::function<void(std::string)> finish;
+      {
+        std::lock_guard l(p->mu);
+        --p->running;
+        if (r) {
+          // The whole answer stays within the limit: an element that would push it over
+          // answers with an error in its place (the call gets an error, not a partial reply).
+          if (p->bytes + r->size() + 1 > limits_.max_response_bytes) {
+            ++errors_;
+            r = too_large_text(p->ids[i], p->bytes + r->size() + 1, limits_.max_response_bytes);
+          }
+          p->bytes += r->size() + 1;
+        }
+        p->slots[i] = std::move(r);
+        p->done[i] = 1;
+        for (; p->flushed < p->slots.size() && p->done[p->flushed]; ++p->flushed) {
+          auto& slot = p->slots[p->flushed];
+          if (!slot) continue;
+          p->out += p->out.empty() ? '[' : ',';
+          p->out += *slot;
+          slot.reset();
+        }
+        if (--p->remaining == 0) finish = std::move(p->reply);
+      }
+      if (finish) {
+        std::string out = std::move(p->out);
+        if (!out.empty()) out += ']';
+        p->message = json();
+        finish(std::move(out));
+        return;
+      }
+      pump(p, session);
+    });
+    lock.lock();
+  }
+  p->pumping = false;
 }
 
 void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
@@ -289,6 +394,14 @@ void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
   }
   const Method& method = it->second;
   Principal who = session->principal();
+  if (who.role != Role::none && check_ && !check_(who)) {
+    // The token was revoked since this session logged in.
+    Principal anon;
+    anon.transport = who.transport;
+    anon.name = "anonymous";
+    session->set_principal(anon);
+    who = anon;
+  }
   if (who.role < method.role) {
     if (who.role == Role::none)
       finish(std::nullopt,
@@ -321,7 +434,8 @@ void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
                                         fmt::format("internal error: {}", e.what())));
     }
   };
-  if (method.blocking && blocking_) blocking_(std::move(run));
+  if (method.control && control_) control_(std::move(run));
+  else if (method.blocking && blocking_) blocking_(std::move(run));
   else run();
 }
 

@@ -23,6 +23,7 @@ IFS=: read -r name _ uid gid _ home shell < <(grep '^gonio:' "$t/etc/passwd" || 
 [[ $shell == */nologin ]] || fail "gonio's shell is $shell"
 grep -q "^gonio:x:$gid:" "$t/etc/group" || fail "gonio's primary group is not gonio"
 grep -Eq '^dialout:x:[0-9]+:(.*,)?gonio(,.*)?$' "$t/etc/group" || fail "gonio is not in group dialout"
+grep -Eq '^gonio-dev:x:[0-9]+:(.*,)?gonio(,.*)?$' "$t/etc/group" || fail "gonio is not in group gonio-dev (the device nodes')"
 
 out=$(systemd-tmpfiles --root="$t" --create gonio.conf 2>&1) || fail "systemd-tmpfiles: $out"
 owner() { stat -c '%a %u %g' "$t$1"; }

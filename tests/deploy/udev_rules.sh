@@ -49,7 +49,7 @@ while IFS= read -r line || [[ -n $line ]]; do
     fi
   done
   if [[ -n ${got[GROUP]+x} ]]; then
-    [[ ${got[GROUP]} == gonio ]] || fail "line $n: GROUP=\"${got[GROUP]}\", expected gonio"
+    [[ ${got[GROUP]} == gonio-dev ]] || fail "line $n: GROUP=\"${got[GROUP]}\", expected gonio-dev (not gonio: its members only get gonioctl)"
     [[ ${got[MODE]:-} == 0660 ]] || fail "line $n: GROUP without MODE=\"0660\""
     [[ -n ${got[ATTRS{idVendor}]:-${got[ATTR{idVendor}]:-}} && -n ${got[ATTRS{idProduct}]:-${got[ATTR{idProduct}]:-}} ]] ||
       fail "line $n: a device rule must match idVendor and idProduct"

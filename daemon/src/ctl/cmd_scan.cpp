@@ -118,7 +118,7 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
   auto* submit = scan->add_subcommand("submit", "queue a scan");
   submit->add_option("--sample", a->sample, "sample id or name")->required();
   submit->add_option("--geometry", a->geometries, "45as15, 45/-30 or astm (repeatable)");
-  submit->add_option("--grid", a->grids, "grid, e.g. 'in=45;out=-80:80:2' (repeatable)");
+  submit->add_option("--grid", a->grids, "grid, e.g. 'in=45;out=-30:80:2' (repeatable)");
   submit->add_option("--wavelengths", a->wavelengths, "e.g. 400:700:10");
   submit->add_option("--repeats", a->repeats);
   submit->add_option("--reference", a->reference, "every_point, interval or start");
@@ -202,14 +202,21 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
   ex->add_option("--output,-o", a->output, "file (default: scan-ID.FORMAT; '-' for stdout)");
   ex->callback([&ctx, a] {
     ctx.action = [a](Session& s) {
-      const auto r = s.call("scan.export", json{{"scan", a->id}, {"format", a->format}});
+      // csv and json come in chunks (next_offset until null), written as they arrive.
+      json r = s.call("scan.export", json{{"scan", a->id}, {"format", a->format}});
       const auto path = a->output.empty() ? r["filename"].get<std::string>() : a->output;
-      if (path == "-") {
-        std::cout << r["content"].get<std::string>();
-        return 0;
+      std::ofstream file;
+      if (path != "-") file.open(path, std::ios::binary | std::ios::trunc);
+      std::ostream& out = path == "-" ? std::cout : file;
+      std::size_t points = 0;
+      for (;;) {
+        out << r["content"].get<std::string>();
+        points += r["points"].get<std::size_t>();
+        if (!r.contains("next_offset") || r["next_offset"].is_null()) break;
+        r = s.call("scan.export", json{{"scan", a->id}, {"format", a->format}, {"offset", r["next_offset"]}});
       }
-      std::ofstream out(path, std::ios::binary | std::ios::trunc);
-      out << r["content"].get<std::string>();
+      r["points"] = points;
+      if (path == "-") return 0;
       if (!out) throw Error(Errc::io_error, fmt::format("cannot write {}", path));
       if (s.options().json)
         std::cout << json{{"file", path}, {"format", r["format"]}, {"points", r["points"]}}.dump(2) << "\n";

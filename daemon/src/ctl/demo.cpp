@@ -1,6 +1,6 @@
 // gonioctl demo — the README's main job, end to end on the mock instrument:
 // start goniod --mock in a fresh state dir, create the glossy demo sample, submit the demo
-// scan (θi = 45°, θr = −80…80° step 2°, 400–700 nm), watch it live, print measured vs
+// scan (θi = 45°, θr = −30…80° step 2°, 400–700 nm), watch it live, print measured vs
 // predicted with the divergence summary, plot both curves to a PNG (twin plot API), and stop
 // goniod with SIGTERM (or leave it serving).
 #include <fcntl.h>
@@ -31,7 +31,8 @@ using nlohmann::json;
 namespace {
 
 constexpr const char* kSampleName = "glossy-demo";
-constexpr const char* kGrid = "in=45;out=-80:80:2";
+// The receive arm stays 15° clear of the incidence arm (retro-reflection at θr = −45°).
+constexpr const char* kGrid = "in=45;out=-30:80:2";
 constexpr const char* kWavelengths = "400:700:10";
 
 fs::path self_dir() {

@@ -12,11 +12,23 @@
 // It prints p50 / p99 / max latency, throughput and errors per target, goniod's resident
 // memory and the scan runner's own time per point (excluding motion, photometer and twin).
 // Wall times are measured, never asserted.
+//
+// --hostile adds what an attacker (or a clumsy script) does, against a goniod it started
+// itself, and reports goniod's peak RSS (VmHWM) after each phase:
+//   single   one request at a time, each up to max_message_bytes: a 1 MB batch of
+//            rpc.discover and one of {} (no login), a 1 MB line of tiny values, the largest
+//            allowed batch of rpc.discover, 128 pages of 1000 points, a scan.export
+//   flood    64 clients at once for --seconds, each in a loop picking one of: the requests
+//            above; pipelining rpc.discover without reading the answers; a line that never
+//            ends; connecting without logging in
+//   control  32 viewers hammering scan.export while a technician pauses and resumes a
+//            queued scan: the latency of scan.pause
 #include <fcntl.h>
 #include <netinet/in.h>
 #include <signal.h>
 #include <sys/epoll.h>
 #include <sys/socket.h>
+#include <sys/time.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -141,6 +153,135 @@ double quantile(std::vector<double>& v, double q) {
   return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
 }
 
+// ---- hostile clients ---------------------------------------------------------------------
+
+// A raw NDJSON connection: writes whatever it is given and reads lines (or not).
+class Raw {
+ public:
+  explicit Raw(const std::string& uri) {
+    const auto colon = uri.rfind(':');
+    const int port = std::stoi(uri.substr(colon + 1));
+    fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<std::uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (::connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
+      ::close(fd_);
+      throw std::runtime_error(fmt::format("connect: {}", std::strerror(errno)));
+    }
+    timeval tv{10, 0};
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    ::setsockopt(fd_, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
+  }
+  ~Raw() { ::close(fd_); }
+  Raw(const Raw&) = delete;
+  Raw& operator=(const Raw&) = delete;
+  bool send(const std::string& bytes) {
+    std::size_t off = 0;
+    while (off < bytes.size()) {
+      const auto n = ::send(fd_, bytes.data() + off, bytes.size() - off, MSG_NOSIGNAL);
+      if (n <= 0) return false;
+      off += static_cast<std::size_t>(n);
+    }
+    return true;
+  }
+  // One line; empty on close or timeout.
+  std::string line() {
+    for (;;) {
+      if (const auto nl = buf_.find('\n'); nl != std::string::npos) {
+        auto l = buf_.substr(0, nl);
+        buf_.erase(0, nl + 1);
+        return l;
+      }
+      char b[65536];
+      const auto n = ::recv(fd_, b, sizeof b, 0);
+      if (n <= 0) return {};
+      buf_.append(b, static_cast<std::size_t>(n));
+    }
+  }
+  std::string call(const std::string& method, const json& params) {
+    send(json{{"jsonrpc", "2.0"}, {"id", 1}, {"method", method}, {"params", params}}.dump() + "\n");
+    return line();
+  }
+
+ private:
+  int fd_ = -1;
+  std::string buf_;
+};
+
+// Peak resident memory of a process (VmHWM) in MiB; NAN when unknown.
+double peak_rss_mib(pid_t pid) {
+  std::ifstream in(fmt::format("/proc/{}/status", pid));
+  std::string l;
+  while (std::getline(in, l))
+    if (l.starts_with("VmHWM:")) return std::stod(l.substr(6)) / 1024.0;
+  return NAN;
+}
+
+std::string batch_of(const std::string& element, std::size_t bytes) {
+  std::string b = "[";
+  while (b.size() + element.size() + 2 < bytes) {
+    if (b.size() > 1) b += ',';
+    b += element;
+  }
+  return b + "]\n";
+}
+
+struct Hostile {
+  Hostile(std::string u, std::string t, std::int64_t s) : uri(std::move(u)), token(std::move(t)), scan(s) {}
+  std::string uri, token;
+  std::int64_t scan = 0;
+  std::string discover_batch = batch_of(R"({"jsonrpc":"2.0","id":1,"method":"rpc.discover"})", 1000000);
+  std::string empty_batch = batch_of("{}", 1000000);
+  std::string values_line = [] {
+    std::string z(999000, '0');
+    for (std::size_t i = 1; i < z.size(); i += 2) z[i] = ',';
+    return R"({"jsonrpc":"2.0","id":1,"method":"rpc.discover","params":{"x":[)" + z + "0]}}\n";
+  }();
+  std::string max_batch = [] {
+    std::string b = "[";
+    for (int i = 0; i < 128; ++i) b += fmt::format("{}{{\"jsonrpc\":\"2.0\",\"id\":{},\"method\":\"rpc.discover\"}}", i ? "," : "", i);
+    return b + "]\n";
+  }();
+  std::string pages_batch(std::int64_t s) const {
+    std::string b = "[";
+    for (int i = 0; i < 128; ++i)
+      b += (i ? "," : "") + json{{"jsonrpc", "2.0"}, {"id", i}, {"method", "scan.points"},
+                                  {"params", {{"scan", s}, {"limit", 1000}}}}.dump();
+    return b + "]\n";
+  }
+
+  // One hostile act (kind 0..8) on a fresh connection; returns when it is over.
+  void act(int kind) const {
+    Raw r(uri);
+    const auto login = [&] { r.call("auth.login", json{{"token", token}}); };
+    switch (kind) {
+      case 0: r.send(discover_batch), r.line(); break;
+      case 1: r.send(empty_batch), r.line(); break;
+      case 2: r.send(values_line), r.line(); break;
+      case 3: r.send(max_batch), r.line(); break;
+      case 4: login(), r.send(pages_batch(scan)), r.line(); break;
+      case 5: login(), r.call("scan.export", json{{"scan", scan}, {"format", "json"}}); break;
+      case 6: {  // pipelines without reading the answers, then lingers
+        login();
+        std::string lines;
+        for (int i = 0; i < 200; ++i) lines += R"({"jsonrpc":"2.0","id":1,"method":"rpc.discover"})" "\n";
+        r.send(lines);
+        std::this_thread::sleep_for(std::chrono::seconds(2));
+        break;
+      }
+      case 7:  // a line that never ends
+        r.send(R"({"jsonrpc":"2.0","id":1,"method":"rpc.discover","params":{"pad":")" + std::string(500000, 'x'));
+        std::this_thread::sleep_for(std::chrono::seconds(2));
+        break;
+      default:  // connects and says nothing
+        std::this_thread::sleep_for(std::chrono::seconds(2));
+        break;
+    }
+  }
+};
+
 Result run_clients(const std::string& target, const std::string& uri, const std::string& token,
                    std::size_t clients, double seconds, const std::string& method, const json& params) {
   Result res;
@@ -208,6 +349,8 @@ int main(int argc, char** argv) {
   app.add_option("--seconds", seconds, "duration of each target")->check(CLI::Range(0.2, 3600.0));
   app.add_option("--time-scale", time_scale, "the mock's real-time factor (keeps the scan running)");
   app.add_flag("--json", as_json, "print the figures as JSON");
+  bool hostile = false;
+  app.add_flag("--hostile", hostile, "also measure goniod under hostile clients (peak RSS, control latency under an export flood)");
   CLI11_PARSE(app, argc, argv);
 
   pid_t child = -1;
@@ -264,7 +407,7 @@ int main(int argc, char** argv) {
     if (!dir.empty()) {
       admin.call("sample.create", json{{"name", "load"}, {"bsdf", gonio::daemon::kDemoSampleBsdf}});
       const auto s = admin.call("scan.submit", json{{"sample", "load"},
-                                                   {"grids", {"in=15,30,45,60;out=-80:80:1"}},
+                                                   {"grids", {"in=15,30,45,60;out=-5:80:1"}},
                                                    {"repeats", 2}});
       scan = s["id"].get<std::int64_t>();
       // Wait until the scan runs and has points to page through.
@@ -291,6 +434,80 @@ int main(int argc, char** argv) {
     const auto after = admin.call("system.info");
     const auto sc = scan ? admin.call("scan.get", json{{"scan", scan}}) : json(nullptr);
 
+    json hostile_out = json::object();
+    if (hostile && child > 0 && scan) {
+      Hostile h{uri, token, scan};
+      // single: one hostile request at a time.
+      json single = json::array();
+      for (int kind = 0; kind <= 5; ++kind) {
+        h.act(kind);
+        single.push_back(json{{"kind", kind}, {"peak_rss_mib", peak_rss_mib(child)}});
+      }
+      hostile_out["single_peak_rss_mib"] = peak_rss_mib(child);
+      // flood: 64 clients, each acting in a loop.
+      std::atomic<std::size_t> acts{0};
+      {
+        std::vector<std::thread> ts;
+        const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+        for (int i = 0; i < 64; ++i)
+          ts.emplace_back([&, i] {
+            for (int n = 0; Clock::now() < end; ++n) {
+              try {
+                h.act((i + n) % 9);
+                ++acts;
+              } catch (const std::exception&) {
+              }
+            }
+          });
+        for (auto& t : ts) t.join();
+      }
+      hostile_out["flood_clients"] = 64;
+      hostile_out["flood_acts"] = acts.load();
+      hostile_out["flood_peak_rss_mib"] = peak_rss_mib(child);
+      // control: scan.pause of a queued scan while 32 viewers hammer scan.export.
+      const auto viewer_token = admin.call("auth.create_token", json{{"name", "load-viewer"}, {"role", "viewer"}})["token"].get<std::string>();
+      const auto queued = admin.call("scan.submit", json{{"sample", "load"}, {"geometries", {"45as15"}},
+                                                          {"not_before", "2999-01-01T00:00:00Z"}})["id"];
+      std::atomic<bool> stop{false};
+      std::atomic<std::size_t> exports{0};
+      std::vector<std::thread> viewers;
+      for (int i = 0; i < 32; ++i)
+        viewers.emplace_back([&] {
+          try {
+            Client v(uri, std::chrono::seconds(60));
+            v.login(viewer_token);
+            while (!stop.load()) {
+              v.call("scan.export", json{{"scan", scan}, {"format", "csv"}});
+              ++exports;
+            }
+          } catch (const std::exception&) {
+          }
+        });
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+      std::vector<double> pause_ms;
+      {
+        Client tech(uri, std::chrono::seconds(60));
+        tech.login(token);
+        const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+        while (Clock::now() < end) {
+          const auto t0 = Clock::now();
+          tech.call("scan.pause", json{{"scan", queued}});
+          pause_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+          tech.call("scan.resume", json{{"scan", queued}});
+          std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        }
+      }
+      stop = true;
+      for (auto& t : viewers) t.join();
+      hostile_out["control"] = json{{"viewers", 32}, {"exports", exports.load()}, {"pauses", pause_ms.size()},
+                                    {"pause_p50_ms", quantile(pause_ms, 0.5)},
+                                    {"pause_p99_ms", quantile(pause_ms, 0.99)},
+                                    {"pause_max_ms", pause_ms.empty() ? NAN : pause_ms.back()}};
+      hostile_out["peak_rss_mib"] = peak_rss_mib(child);
+      hostile_out["single"] = single;
+      hostile_out["net"] = admin.call("system.info")["net"];
+    }
+
     json out = json::array();
     gonio::daemon::Table t({"target", "clients", "requests", "req/s", "p50 ms", "p99 ms", "max ms", "errors"});
     for (auto& r : results) {
@@ -312,7 +529,8 @@ int main(int argc, char** argv) {
                         {"runner", runner},
                         {"scan", sc},
                         {"points_during_run", after["runner"]["points_measured"].get<std::int64_t>() -
-                                                  before["runner"]["points_measured"].get<std::int64_t>()}}
+                                                  before["runner"]["points_measured"].get<std::int64_t>()},
+                        {"hostile", hostile_out}}
                        .dump(2)
                 << "\n";
     } else {
@@ -324,6 +542,18 @@ int main(int argc, char** argv) {
           after["runner"]["points_measured"].get<std::int64_t>() - before["runner"]["points_measured"].get<std::int64_t>(),
           gonio::daemon::cell(runner["overhead_ms_p50"]), gonio::daemon::cell(runner["overhead_ms_p99"]),
           gonio::daemon::cell(runner["overhead_ms_max"]), gonio::daemon::cell(runner["overhead_window"]));
+      if (!hostile_out.empty()) {
+        const auto& ctl = hostile_out["control"];
+        std::cout << fmt::format(
+            "hostile: goniod peak RSS {:.1f} MiB after single requests, {:.1f} MiB after {} clients "
+            "({} acts); scan.pause under {} export viewers ({} exports): p50 {:.2f} ms, p99 {:.2f} ms, "
+            "max {:.2f} ms ({} pauses); net {}\n",
+            hostile_out["single_peak_rss_mib"].get<double>(), hostile_out["flood_peak_rss_mib"].get<double>(),
+            hostile_out["flood_clients"].get<int>(), hostile_out["flood_acts"].get<std::size_t>(),
+            ctl["viewers"].get<int>(), ctl["exports"].get<std::size_t>(), ctl["pause_p50_ms"].get<double>(),
+            ctl["pause_p99_ms"].get<double>(), ctl["pause_max_ms"].get<double>(), ctl["pauses"].get<std::size_t>(),
+            hostile_out["net"].dump());
+      }
     }
     cleanup();
     if (!dir.empty()) {

@@ -13,9 +13,12 @@ using methods::principal_json;
 using nlohmann::json;
 
 void register_auth(MethodRegistrar& reg, Services& s) {
+  // One serialised copy, shared by every caller: a batch of discovers costs no document
+  // tree per call (and the batch and response limits bound the rest).
+  static const auto discover = std::make_shared<const std::string>(openrpc_document().dump());
   reg.add("rpc.discover", [](rpc::Call& c) {
     ObjectReader(c.params, "").finish();
-    return openrpc_document();
+    return rpc::RawJson{{}, discover};
   });
 
   reg.add("auth.login", [&s](rpc::Call& c) {
@@ -64,6 +67,8 @@ void register_auth(MethodRegistrar& reg, Services& s) {
     r.finish();
     if (!s.auth.revoke(name)) throw Error::not_found("name", fmt::format("token '{}'", name));
     s.store.audit(actor(c), "auth.revoke_token", fmt::format("token:{}", name));
+    // Sessions logged in with it end now (HTTP requests are checked one by one anyway).
+    if (s.end_sessions_of) s.end_sessions_of(name);
     return json{{"revoked", name}};
   });
 }

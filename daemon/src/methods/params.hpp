@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -30,6 +31,14 @@ std::size_t read_offset(json_util::ObjectReader& r);
 Sample resolve_sample(const Store& store, const nlohmann::json& ref, const std::string& field);
 // Error(not_found) naming "scan" when there is no such scan.
 Scan require_scan(const Store& store, std::int64_t id);
+
+// A BSDF spec from a client with every '@file' confined to `data_dir`: each path must be
+// relative, without '..', of plain characters, and name a regular file reached without
+// symbolic links (opened O_NOFOLLOW | O_NONBLOCK component by component, so neither a link
+// nor a FIFO gets through). Returns the spec with the paths made absolute. Throws
+// Error(invalid_argument) naming `field`.
+std::string confine_bsdf_files(const std::string& spec, const std::filesystem::path& data_dir,
+                               const std::string& field);
 
 // Who is calling, as written to the audit log.
 std::string actor(const rpc::Call& c);

@@ -13,7 +13,7 @@ void MethodRegistrar::add(std::string_view name, rpc::Handler handler) {
     throw Error(Errc::internal, fmt::format("method '{}' has a handler but no entry in the method table", name));
   if (!added_.emplace(name).second)
     throw Error(Errc::internal, fmt::format("method '{}' has two handlers", name));
-  d_.add(rpc::Method{std::string(spec->name), spec->role, spec->blocking, std::move(handler)});
+  d_.add(rpc::Method{std::string(spec->name), spec->role, spec->blocking, std::move(handler), spec->control});
 }
 
 void MethodRegistrar::finish() const {

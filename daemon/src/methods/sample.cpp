@@ -9,7 +9,8 @@ using nlohmann::json;
 
 void register_sample(MethodRegistrar& reg, Services& s) {
   reg.add("sample.create", [&s](rpc::Call& c) {
-    const auto spec = c.params.get<SampleSpec>();
+    auto spec = c.params.get<SampleSpec>();
+    if (spec.bsdf) spec.bsdf = methods::confine_bsdf_files(*spec.bsdf, s.data_dir, "bsdf");
     if (spec.bsdf) (void)s.twin.make(*spec.bsdf, WavelengthGrid::visible(), "bsdf");
     return json(s.store.create_sample(spec, methods::actor(c)));
   });

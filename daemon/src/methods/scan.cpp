@@ -25,8 +25,11 @@ using nlohmann::json;
 
 namespace {
 
-// The most points one scan.export carries (larger scans are paged through scan.points).
-constexpr std::size_t kMaxExportPoints = 200000;
+// The most values (points × wavelength channels) one scan.export call reads and writes: a
+// csv or json chunk (~160–200 bytes of text per value, within the default response limit),
+// and a bsdf or ssdd table, which needs the whole scan at once.
+constexpr std::size_t kMaxChunkValues = 32768;
+constexpr std::size_t kMaxTableValues = 262144;
 
 enum class Control { pause, resume, cancel };
 
@@ -126,22 +129,51 @@ void register_scan(MethodRegistrar& reg, Services& s) {
     ObjectReader r(c.params, "");
     const auto id = read_id(r, "scan");
     const auto format = r.optional<std::string>("format", "csv");
-    r.finish();
     if (format != "csv" && format != "json" && format != "bsdf" && format != "ssdd")
       throw Error::invalid("format", fmt::format("'{}' is not an export format (allowed: csv, "
                                                  "json, bsdf, ssdd)",
                                                  format));
     const auto scan = require_scan(s.store, id);
-    if (scan.points_done > kMaxExportPoints)
-      throw Error(Errc::unsupported,
-                  fmt::format("scan {} has {} points, more than one export carries ({}); page "
-                              "through scan.points",
-                              id, scan.points_done, kMaxExportPoints),
-                  "scan");
-    const auto points = s.store.points(id, 0, scan.points_done + 1);
-    const auto e = export_scan(scan, points, format);
-    return json{{"scan", id}, {"format", e.format}, {"filename", e.filename},
-                {"media_type", e.media_type}, {"points", points.size()}, {"content", e.content}};
+    const std::size_t channels = std::max<std::size_t>(1, scan.plan.wavelengths.size());
+    const bool table = format == "bsdf" || format == "ssdd";
+    std::size_t offset = 0, limit = 0;
+    if (table) {
+      if (r.has("offset") || r.has("limit"))
+        throw Error::invalid(r.has("offset") ? "offset" : "limit",
+                             fmt::format("a {} export is one table of the whole scan: it takes no "
+                                         "offset or limit",
+                                         format));
+      if (scan.points_done * channels > kMaxTableValues)
+        throw Error(Errc::unsupported,
+                    fmt::format("scan {} has {} points × {} channels = {} values, more than one {} "
+                                "table carries ({}); export csv or json, in chunks",
+                                id, scan.points_done, channels, scan.points_done * channels, format,
+                                kMaxTableValues),
+                    "scan");
+      limit = scan.points_done;
+    } else {
+      // A chunk holds at most kMaxChunkValues values: the points of larger scans come in
+      // several calls, each starting at the previous one's next_offset.
+      const std::size_t per_chunk = std::max<std::size_t>(1, kMaxChunkValues / channels);
+      offset = read_offset(r);
+      limit = read_count(r, "limit", per_chunk, per_chunk);
+    }
+    r.finish();
+    const auto points = s.store.points(id, offset, limit);
+    const std::size_t end = offset + points.size();
+    const bool last = table || end >= scan.points_done;
+    auto e = table ? export_scan(scan, points, format) : export_chunk(scan, points, format, offset, last);
+    // Spliced: the content is escaped once, straight into the response.
+    std::string out = json{{"scan", id}, {"format", e.format}, {"filename", e.filename},
+                           {"media_type", e.media_type}, {"offset", offset}, {"points", points.size()},
+                           {"points_done", scan.points_done},
+                           {"next_offset", last ? json(nullptr) : json(end)}}
+                          .dump();
+    out.pop_back();
+    out += R"(,"content":)";
+    out += json(std::move(e.content)).dump();
+    out += '}';
+    return rpc::RawJson{std::move(out)};
   });
 
   // The inverse twin on a stored scan: the model's free parameters fitted through the twin
@@ -149,7 +181,7 @@ void register_scan(MethodRegistrar& reg, Services& s) {
   reg.add("scan.fit", [&s](rpc::Call& c) {
     ObjectReader r(c.params, "");
     const auto id = read_id(r, "scan");
-    const auto model = r.required<std::string>("model");
+    const auto model = methods::confine_bsdf_files(r.required<std::string>("model"), s.data_dir, "model");
     auto options = methods::read_fit_options(r, s.twin);
     r.finish();
     if (model.empty() || model.size() > 4096)

@@ -36,6 +36,19 @@ std::size_t sampled_resident_bytes() {
   return v;
 }
 
+// "http://user:pw@host:port/path?q" -> "http://host:port".
+std::string webhook_host(const json& url) {
+  if (!url.is_string()) return {};
+  auto u = url.get<std::string>();
+  const auto scheme_end = u.find("://");
+  const auto start = scheme_end == std::string::npos ? 0 : scheme_end + 3;
+  auto end = u.find_first_of("/?#", start);
+  if (end == std::string::npos) end = u.size();
+  auto authority = u.substr(start, end - start);
+  if (const auto at = authority.rfind('@'); at != std::string::npos) authority.erase(0, at + 1);
+  return u.substr(0, start) + authority;
+}
+
 }  // namespace
 
 std::size_t resident_bytes() {
@@ -97,8 +110,14 @@ void register_system(MethodRegistrar& reg, Services& s) {
                    s.dispatcher ? s.dispatcher->requests() : 0, s.dispatcher ? s.dispatcher->errors() : 0,
                    s.hub.sessions(), s.hub.dropped(), s.instrument.stats().dump(), twin_fixed,
                    s.twin.queued(), methods::principal_json(c.principal).dump());
-    if (auto sink = s.alerts.sink()) (out += R"(,"webhook":)") += sink->stats().dump();
+    if (auto sink = s.alerts.sink()) {
+      auto hook = sink->stats();
+      // The URL may carry a path or a query meant as a secret: only admins see it whole.
+      if (c.principal.role < Role::admin && hook.contains("url")) hook["url"] = webhook_host(hook["url"]);
+      (out += R"(,"webhook":)") += hook.dump();
+    }
     if (s.transport_stats) (out += R"(,"transport":)") += s.transport_stats().dump();
+    if (s.net_stats) (out += R"(,"net":)") += s.net_stats().dump();
     out += '}';
     return rpc::RawJson{std::move(out)};
   });

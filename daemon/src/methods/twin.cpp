@@ -36,7 +36,7 @@ void register_twin(MethodRegistrar& reg, Services& s) {
     if ((bsdf == nullptr) == (sample == nullptr))
       throw Error::invalid("bsdf", "give exactly one of 'bsdf' (a spec string) and 'sample'");
     std::string spec;
-    if (bsdf) spec = json_util::get_as<std::string>(*bsdf, "bsdf");
+    if (bsdf) spec = methods::confine_bsdf_files(json_util::get_as<std::string>(*bsdf, "bsdf"), s.data_dir, "bsdf");
     else {
       const auto x = methods::resolve_sample(s.store, *sample, "sample");
       if (!x.spec.bsdf)

@@ -26,7 +26,7 @@ TEST(Crash, SigkillMidScanThenRestartResumesWithNothingLostOrDuplicated) {
   {
     Goniod g(dir.path, cfg);
     auto c = g.unix_conn();
-    id = submit(c, "tile", kTrueSample, json{{"grids", {"in=45;out=-60:60:4"}}});  // 31 points
+    id = submit(c, "tile", kTrueSample, json{{"grids", {"in=45;out=-30:30:2"}}});  // 31 points
     ASSERT_TRUE(eventually([&] { return c.call("scan.get", json{{"scan", id}})["points_done"].get<int>() >= 6; }))
         << g.log_text();
     EXPECT_EQ(g.stop(SIGKILL), 128 + SIGKILL);
@@ -62,7 +62,7 @@ TEST(Crash, SigtermParksTheScanAndRestartFinishesIt) {
   {
     Goniod g(dir.path, cfg);
     auto c = g.unix_conn();
-    id = submit(c, "tile", kTrueSample, json{{"grids", {"in=45;out=-60:60:4"}}});
+    id = submit(c, "tile", kTrueSample, json{{"grids", {"in=45;out=-30:30:2"}}});
     ASSERT_TRUE(eventually([&] { return c.call("scan.get", json{{"scan", id}})["points_done"].get<int>() >= 3; }));
     EXPECT_EQ(g.stop(SIGTERM), 0) << g.log_text();
     EXPECT_NE(g.log_text().find("stopped cleanly"), std::string::npos);
@@ -113,7 +113,7 @@ TEST(Crash, InstrumentStopPausesTheRunningScanAtOnce) {
   o.time_scale = 0.2;
   Goniod g(dir.path, mock_config(o));
   auto c = g.unix_conn();
-  const auto id = submit(c, "tile", kTrueSample, json{{"grids", {"in=45;out=-60:60:4"}}});
+  const auto id = submit(c, "tile", kTrueSample, json{{"grids", {"in=45;out=-30:30:2"}}});
   ASSERT_EQ(wait_state(c, id, {"running"})["state"], "running");
   auto tech = g.unix_conn();
   const auto r = tech.call("instrument.stop");

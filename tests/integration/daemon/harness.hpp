@@ -303,6 +303,11 @@ class WebSocket {
     }
   }
   std::deque<json> notes;
+  Conn& conn() { return c_; }
+  // Whether goniod closed the connection (a close frame or EOF) within `timeout`.
+  bool closed_by_peer(std::chrono::milliseconds timeout = 10s) {
+    return !read_text(timeout).has_value() && c_.closed_by_peer(2s);
+  }
 
  private:
   bool read_exact(std::size_t n, std::string& out, std::chrono::milliseconds timeout) {

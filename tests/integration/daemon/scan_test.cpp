@@ -14,7 +14,7 @@ TEST(Scan, FullScanOnTheMockStoresMeasuredAndPredicted) {
   auto c = g.unix_conn();
   auto watcher = g.unix_conn();
   watcher.call("subscribe", json{{"topics", {"progress", "points", "state"}}});
-  const auto id = submit(c, "white-tile", kTrueSample, json{{"grids", {"in=45;out=-60:60:10"}}, {"wavelengths", "400:700:20"}});
+  const auto id = submit(c, "white-tile", kTrueSample, json{{"grids", {"in=45;out=-30:30:5"}}, {"wavelengths", "400:700:20"}});
   const auto sc = wait_state(c, id, {"completed", "failed", "paused"});
   ASSERT_EQ(sc["state"], "completed") << sc.dump() << g.log_text();
   EXPECT_EQ(sc["points_total"], 13);
@@ -114,7 +114,7 @@ TEST(Scan, QueueOrderPauseResumeCancelAndNotBefore) {
   Goniod g(dir.path, mock_config(o));
   auto c = g.unix_conn();
   c.call("sample.create", json{{"name", "s"}, {"bsdf", kTrueSample}});
-  const auto plan = json{{"sample", "s"}, {"grids", {"in=30;out=-60:60:5"}}};
+  const auto plan = json{{"sample", "s"}, {"grids", {"in=30;out=-18:78:4"}}};
   const auto first = c.call("scan.submit", plan)["id"].get<std::int64_t>();
   ASSERT_EQ(wait_state(c, first, {"running"})["state"], "running");
   auto later = plan;
@@ -169,7 +169,7 @@ TEST(Scan, StateNotificationsCarryTheReasonThatWasStored) {
   auto watcher = g.unix_conn();
   watcher.call("subscribe", json{{"topics", {"state"}}});
   c.call("sample.create", json{{"name", "s"}, {"bsdf", kTrueSample}});
-  const auto plan = json{{"sample", "s"}, {"grids", {"in=30;out=-60:60:5"}}};
+  const auto plan = json{{"sample", "s"}, {"grids", {"in=30;out=-18:78:4"}}};
   const auto running = c.call("scan.submit", plan)["id"].get<std::int64_t>();
   ASSERT_EQ(wait_state(c, running, {"running"})["state"], "running");
   auto later = plan;

@@ -146,5 +146,62 @@ TEST(Dispatcher, BlockingMethodsRunOnTheExecutor) {
   EXPECT_EQ(r[1]["id"], 2);
 }
 
+TEST(Dispatcher, BatchesAndValuesAreCountedBeforeParsing) {
+  DispatchLimits limits;
+  limits.max_batch = 3;
+  limits.max_values = 50;
+  Dispatcher d(nullptr, nullptr, limits);
+  d.add(Method{"ping", Role::none, false, [](Call&) { return json(1); }});
+  const auto run = [&](const std::string& text) {
+    std::string out;
+    const auto weight = d.handle(text, std::make_shared<TestSession>(Role::viewer), [&](std::string r) { out = std::move(r); });
+    return std::make_pair(json::parse(out), weight);
+  };
+  const std::string ping = R"({"jsonrpc":"2.0","id":1,"method":"ping"})";
+  auto [r, w] = run("[" + ping + "," + ping + "," + ping + "]");
+  EXPECT_EQ(r.size(), 3u);
+  EXPECT_EQ(w, 3u);  // a batch weighs its elements
+  std::tie(r, w) = run("[" + ping + "," + ping + "," + ping + "," + ping + "]");
+  EXPECT_EQ(r["error"]["code"], code::invalid_request);
+  EXPECT_NE(r["error"]["message"].get<std::string>().find("server.max_batch = 3"), std::string::npos);
+  EXPECT_EQ(w, 1u);
+  std::tie(r, w) = run("[{},{},{},{}]");
+  EXPECT_EQ(r["error"]["code"], code::invalid_request);
+  std::string many = R"({"jsonrpc":"2.0","id":1,"method":"ping","params":{"x":[)";
+  for (int i = 0; i < 60; ++i) many += (i ? ",0" : "0");
+  std::tie(r, w) = run(many + "]}}");
+  EXPECT_NE(r["error"]["message"].get<std::string>().find("JSON values"), std::string::npos) << r.dump();
+  // Strings hide their brackets and commas.
+  std::tie(r, w) = run(R"([{"jsonrpc":"2.0","id":"[,,,,{{{","method":"ping"}])");
+  EXPECT_EQ(r[0]["id"], "[,,,,{{{");
+}
+
+TEST(Dispatcher, ABatchRunsAWindowAtATimeAndStaysWithinTheResponseLimit) {
+  std::vector<std::function<void()>> queued;
+  DispatchLimits limits;
+  limits.batch_window = 2;
+  limits.max_response_bytes = 200;
+  Dispatcher d([&](std::function<void()> f) { queued.push_back(std::move(f)); }, nullptr, limits);
+  d.add(Method{"slow", Role::viewer, true, [](Call& c) { return json(std::string(c.params.value("n", 1), 'x')); }});
+  std::string batch = "[";
+  for (int i = 0; i < 5; ++i)
+    batch += (i ? "," : "") + json{{"jsonrpc", "2.0"}, {"id", i}, {"method", "slow"}, {"params", {{"n", i == 3 ? 150 : 10}}}}.dump();
+  std::string out;
+  d.handle(batch + "]", std::make_shared<TestSession>(Role::viewer), [&](std::string r) { out = std::move(r); });
+  EXPECT_EQ(queued.size(), 2u);  // the window
+  for (std::size_t i = 0; i < queued.size(); ++i) {  // each finished element lets the next start
+    auto f = std::move(queued[i]);
+    f();
+  }
+  EXPECT_EQ(queued.size(), 5u);
+  ASSERT_FALSE(out.empty());
+  const auto r = json::parse(out);
+  ASSERT_EQ(r.size(), 5u);
+  EXPECT_TRUE(r[0].contains("result"));
+  EXPECT_EQ(r[3]["error"]["code"], code::unsupported);  // would pass 200 bytes: an error in its place
+  EXPECT_EQ(r[3]["id"], 3);
+  EXPECT_LE(out.size(), 200u + 400u);
+}
+
 }  // namespace
 }  // namespace gonio::daemon::rpc

@@ -45,8 +45,8 @@ TEST(RegistryGuard, OpenInstrumentGuardsTheMotionWithTheLimitsTable) {
 }
 
 TEST(RegistryGuard, UnsetSeparationTakesTheDriversDefault) {
-  // The mock: its profile's clearance (gcms4 has none).
-  EXPECT_DOUBLE_EQ(motion_guard(MotionLimits{}, kMock["motion"]).min_separation_deg(), 0);
+  // The mock: its profile's clearance (gcms4: 10°).
+  EXPECT_DOUBLE_EQ(motion_guard(MotionLimits{}, kMock["motion"]).min_separation_deg(), 10);
   // Any other motion driver: the documented default; its config is not opened.
   const json modbus{{"driver", "modbus"}, {"links", json::object()}};
   EXPECT_DOUBLE_EQ(motion_guard(MotionLimits{}, modbus).min_separation_deg(),

@@ -9,6 +9,8 @@
 // the viewed area at θr = 0 up to θi ≈ 76° and overflows it beyond — the paper's "part of
 // the illuminated spot is not visible" at large incidence. Sample and reference plate sizes
 // are not in the paper: 100 × 100 mm, large enough for the viewed area up to θr ≈ 85°.
+// Nor is the arms' clearance: 10° (instrument.hpp says why), so that no profile lets the
+// two arms meet (θi = 45°, θr = −44° puts them 1° apart).
 #include <fstream>
 #include <sstream>
 
@@ -180,7 +182,7 @@ void from_json(const nlohmann::json& j, InstrumentProfile& p) {
     p.arms.incidence_offset_deg = ra.optional<double>("incidence_offset_deg", 0.0);
     p.arms.receive_offset_deg = ra.optional<double>("receive_offset_deg", 0.0);
     p.arms.accuracy_deg = ra.optional<double>("accuracy_deg", p.arms.accuracy_deg);
-    p.arms.min_separation_deg = ra.optional<double>("min_separation_deg", 0.0);
+    p.arms.min_separation_deg = ra.optional<double>("min_separation_deg", InstrumentProfile{}.arms.min_separation_deg);
     ra.finish();
   }
   p.reference_bsdf = r.optional<std::string>("reference_bsdf", p.reference_bsdf);

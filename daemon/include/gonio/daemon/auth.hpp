@@ -5,6 +5,7 @@
 // timing says nothing about which hash matched or how much of it did.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <mutex>
@@ -46,6 +47,9 @@ class Auth {
   std::string create(const std::string& name, Role role);
   bool revoke(const std::string& name);
   std::vector<TokenEntry> list() const;  // configured + stored (hashes)
+  // Whether a principal still stands: a token's is, while a token of that name and role
+  // exists (not revoked); a Unix peer's (name "unix:...") always is.
+  bool still_valid(const Principal& p) const;
 
   void reload();  // re-reads the stored tokens
 
@@ -54,6 +58,7 @@ class Auth {
   Store& store_;
   mutable std::mutex mu_;
   std::vector<TokenEntry> stored_;
+  std::atomic<std::uint64_t> revocations_{0};
 };
 
 }  // namespace gonio::daemon

@@ -69,12 +69,28 @@ struct Config {
   milliseconds read_timeout{10000};   // a started message must complete within this
   milliseconds idle_timeout{0};       // 0: connections may stay idle (subscribers)
   std::size_t max_queue = 1024;       // queued outgoing messages per connection
+  std::size_t max_queue_bytes = 16u << 20;      // queued outgoing bytes per connection
+  std::size_t max_buffered_bytes = 64u << 20;   // queued outgoing bytes over all connections
+  milliseconds write_timeout{10000};  // a write must complete within this (else: slow reader)
+  milliseconds login_timeout{10000};  // TCP/WebSocket peers must authenticate within this
+  std::size_t max_in_flight = 16;     // requests (batch elements) being handled per connection
+  std::size_t max_batch = 128;        // elements of one batch
+  std::size_t max_response_bytes = 8u << 20;
+  std::vector<std::string> allowed_origins;  // browser origins besides the listener's own host
   std::size_t max_connections = 512;
   std::size_t rpc_threads = 2;        // workers for blocking methods
   std::string log_level = "info";
 
   // [auth]
   std::vector<TokenEntry> tokens;  // [[auth.token]] name, role, sha256
+  // [auth.unix]: roles of Unix-socket peers by their uid and groups (primary and
+  // supplementary). Unset lists take their defaults at start: admin_uids root and the
+  // user goniod runs as, technician_gids goniod's group (the socket's). A peer that
+  // matches nothing has no role and must auth.login like a TCP peer.
+  struct UnixRoles {
+    std::optional<std::vector<std::uint32_t>> admin_uids, admin_gids, technician_uids,
+        technician_gids, viewer_uids, viewer_gids;
+  } unix_roles;
 
   // [store]
   bool synchronous_full = true;  // "full": fsync every committed point; "normal": WAL default
@@ -105,6 +121,7 @@ struct Config {
   std::uint64_t twin_max_samples = 1ull << 20;
   int twin_replicates = 16;
   std::uint64_t twin_seed = 1;
+  std::string twin_data_dir;  // '@file' BSDF specs from clients: only here (empty: <state-dir>/data)
 
   // [divergence]
   double z_threshold = 5.0;

@@ -31,4 +31,11 @@ struct ExportResult {
 ExportResult export_scan(const Scan& scan, const std::vector<PointRecord>& points,
                          std::string_view format);
 
+// One chunk of a csv or json export: the points from `offset` on. Chunks from offset 0 to
+// the one marked `last` concatenate into the whole file (csv: the header comes with the
+// first chunk; json: the first opens {"scan": ..., "points": [ and the last closes it).
+// This keeps a large scan's export out of one in-memory document.
+ExportResult export_chunk(const Scan& scan, const std::vector<PointRecord>& points,
+                          std::string_view format, std::size_t offset, bool last);
+
 }  // namespace gonio::daemon

@@ -22,7 +22,9 @@
 // Scheduling: interrupted scans first, then queued scans in queue order whose not-before
 // time has passed. A device fault pauses the scan (reason in its state), raises a critical
 // alert and latches the instrument: nothing else starts until a technician resumes a scan
-// or resets the instrument (or auto-resume, when configured, does it). instrument.stop
+// or resets the instrument (or auto-resume, when configured, does it). The latch survives
+// a crash, an OOM kill or an upgrade: it is rebuilt at start from the device_fault alerts
+// nobody has acknowledged, and resuming or resetting acknowledges them. instrument.stop
 // stops the arms at once from any thread and pauses the running scan.
 //
 // Every change of a scan's state goes through one private member, transition(), which
@@ -157,6 +159,10 @@ class Instrument {
                   const std::string& actor);
   DeviceFacts device_facts() const;  // for check_plan
   void on_device_fault(const Error& e);
+  // The fault latch outlives the process: at start it is rebuilt from the unacknowledged
+  // device_fault alerts, and a technician's resume or reset acknowledges them.
+  void restore_fault_latch();
+  void acknowledge_faults(const std::string& actor);
   // Runs `fn` on the runner thread. `needs_devices`: refused while a device is down.
   nlohmann::json submit(std::function<nlohmann::json()> fn, bool needs_devices = true);
   void set_state(std::string state, std::string detail = {});

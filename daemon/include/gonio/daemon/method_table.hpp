@@ -1,5 +1,8 @@
 // The table of goniod's JSON-RPC methods: each method's name, the least role that may call
 // it and whether it blocks (runs on the worker executor rather than a network thread).
+// Control methods (pausing, resuming and cancelling scans, stopping and resetting the
+// instrument) run on an executor of their own: a flood of slow viewer work on the workers
+// cannot delay a technician's pause.
 //
 // This is the one place where a method's role is stated in code. The handlers in
 // daemon/src/methods/ attach to the entries by name (an entry without a handler, or a
@@ -18,6 +21,7 @@ struct MethodSpec {
   std::string_view name;
   Role role = Role::viewer;  // Role::none: callable before authentication
   bool blocking = false;
+  bool control = false;  // runs on the control executor
 };
 
 inline constexpr std::array kMethodTable{
@@ -35,8 +39,8 @@ inline constexpr std::array kMethodTable{
     MethodSpec{"instrument.status", Role::viewer, false},
     MethodSpec{"instrument.home", Role::technician, true},
     MethodSpec{"instrument.move", Role::technician, true},
-    MethodSpec{"instrument.stop", Role::technician, false},
-    MethodSpec{"instrument.reset", Role::technician, true},
+    MethodSpec{"instrument.stop", Role::technician, false},  // inline: immediate, never queued
+    MethodSpec{"instrument.reset", Role::technician, true, true},
     MethodSpec{"instrument.calibrate", Role::admin, true},
     // samples
     MethodSpec{"sample.create", Role::technician, true},
@@ -46,9 +50,9 @@ inline constexpr std::array kMethodTable{
     MethodSpec{"scan.submit", Role::technician, true},
     MethodSpec{"scan.get", Role::viewer, false},
     MethodSpec{"scan.list", Role::viewer, false},
-    MethodSpec{"scan.pause", Role::technician, true},
-    MethodSpec{"scan.resume", Role::technician, true},
-    MethodSpec{"scan.cancel", Role::technician, true},
+    MethodSpec{"scan.pause", Role::technician, true, true},
+    MethodSpec{"scan.resume", Role::technician, true, true},
+    MethodSpec{"scan.cancel", Role::technician, true, true},
     MethodSpec{"scan.points", Role::viewer, false},
     MethodSpec{"scan.export", Role::viewer, true},
     MethodSpec{"scan.fit", Role::technician, true},

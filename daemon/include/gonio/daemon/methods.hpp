@@ -37,6 +37,9 @@ struct Services {
   std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();
   std::string started_at;
   std::function<nlohmann::json()> transport_stats;  // connections, listeners
+  std::function<nlohmann::json()> net_stats;        // budgets and dropped peers (net::NetStats)
+  std::function<void(const std::string&)> end_sessions_of;  // a token was revoked
+  std::filesystem::path data_dir;  // where BSDF specs' '@file' names may point (twin.data_dir)
 };
 
 void register_methods(rpc::Dispatcher& d, Services& s);

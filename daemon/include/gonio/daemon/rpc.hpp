@@ -12,7 +12,13 @@
 //
 // Methods declare the least role that may call them and whether they block (instrument,
 // twin, file work): blocking ones run on the worker executor so that the network threads
-// never wait on a device.
+// never wait on a device, and control methods (pause, cancel, stop, reset) on an executor
+// of their own, so that a queue of slow viewer work cannot delay them.
+//
+// Memory is bounded by the limits, not by the client: a message is scanned before it is
+// parsed (nesting depth, batch elements, number of JSON values), a batch runs at most
+// `batch_window` elements at a time, and a response larger than `max_response_bytes`
+// becomes an error for that call.
 #pragma once
 
 #include <atomic>
@@ -100,7 +106,12 @@ struct Call {
 // An already serialised JSON value, spliced into the response as it is (for results built
 // from stored JSON text, which need not be parsed and printed again).
 struct RawJson {
+  RawJson(std::string t = {}, std::shared_ptr<const std::string> s = nullptr)
+      : text(std::move(t)), shared(std::move(s)) {}
   std::string text;
+  // When set, the result is this shared text (served to every caller without a copy per
+  // call until the response is assembled); `text` is then ignored.
+  std::shared_ptr<const std::string> shared;
 };
 using Result = std::variant<nlohmann::json, RawJson>;
 using Handler = std::function<Result(Call&)>;
@@ -110,23 +121,39 @@ struct Method {
   Role role = Role::viewer;  // Role::none: callable before authentication
   bool blocking = false;
   Handler handler;
+  bool control = false;  // runs on the control executor (when there is one)
 };
 
 // Runs a blocking task somewhere else (a worker pool).
 using Executor = std::function<void(std::function<void()>)>;
 
+struct DispatchLimits {
+  std::size_t max_batch = 128;                 // elements of one batch
+  std::size_t max_response_bytes = 8u << 20;   // one response, single or batch
+  std::size_t max_values = 1u << 17;           // JSON values in one message (before parsing)
+  std::size_t batch_window = 16;               // batch elements being processed at once
+};
+
 class Dispatcher {
  public:
-  explicit Dispatcher(Executor blocking);
+  explicit Dispatcher(Executor blocking, Executor control = nullptr, DispatchLimits limits = {});
 
   void add(Method m);
   bool has(std::string_view name) const;
   std::vector<std::string> names() const;
 
   // Handles one message. `reply` is called exactly once, possibly on another thread, with
-  // the response text, or with an empty string when nothing is to be sent.
-  void handle(std::string_view text, const std::shared_ptr<Session>& session,
-              std::function<void(std::string)> reply) const;
+  // the response text, or with an empty string when nothing is to be sent. Returns the
+  // message's weight for the transport's in-flight count: the number of batch elements
+  // dispatched (1 for a single request or a refused message).
+  std::size_t handle(std::string_view text, const std::shared_ptr<Session>& session,
+                     std::function<void(std::string)> reply) const;
+
+  const DispatchLimits& limits() const noexcept { return limits_; }
+
+  // Asked before every call made with a token's role: false when the token has been revoked
+  // since the session logged in (the session then falls back to no role).
+  void set_principal_check(std::function<bool(const Principal&)> check) { check_ = std::move(check); }
 
   // Counters for system.info.
   std::uint64_t requests() const noexcept { return requests_.load(); }
@@ -137,8 +164,11 @@ class Dispatcher {
   // `done` gets the serialised response object, or nullopt for none.
   void handle_one(nlohmann::json& request, const std::shared_ptr<Session>& session,
                   std::function<void(std::optional<std::string>)> done) const;
+  void pump(const std::shared_ptr<Pending>& p, const std::shared_ptr<Session>& session) const;
 
-  Executor blocking_;
+  Executor blocking_, control_;
+  DispatchLimits limits_;
+  std::function<bool(const Principal&)> check_;
   std::map<std::string, Method, std::less<>> methods_;
   mutable std::atomic<std::uint64_t> requests_{0}, errors_{0};
 };

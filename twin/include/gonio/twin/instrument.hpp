@@ -63,7 +63,12 @@ struct InstrumentProfile {
     double incidence_offset_deg = 0;
     double receive_offset_deg = 0;
     double accuracy_deg = 0.5;         // data-sheet angular accuracy (±)
-    double min_separation_deg = 0;     // collision guard between the two arms
+    // Collision guard between the two arms: the closest they may come, in degrees of
+    // |θi + θr|. Both beams alone need half of each in-plane aperture plus both arms'
+    // accuracy (gcms4: 1.05 + 0.8 + 2 × 0.5 = 2.85°); the arm housings, which the profile
+    // does not model, need more. 10° is the default of every real motion driver too; an
+    // installation sets its measured clearance ([instrument.limits] min_separation).
+    double min_separation_deg = 10;
     friend bool operator==(const Arms&, const Arms&) = default;
   } arms;
   std::string reference_bsdf = "lambert:albedo=1";
