@@ -32,7 +32,7 @@ struct Servers {
     limits.read_timeout = std::chrono::milliseconds(200);
     limits.max_in_flight = 4;
     ctx = std::make_unique<gonio::daemon::net::Context>(
-        gonio::daemon::net::Context{d.dispatcher, d.hub, *d.auth, limits});
+        gonio::daemon::net::Context{d.dispatcher, d.hub, *d.auth, limits, stats});
     unix_path = (d.dir / "fuzz.sock").string();
     ndjson = gonio::daemon::net::listen_unix(io, unix_path, *ctx);
     http = gonio::daemon::net::listen_http(io, "127.0.0.1", 0, *ctx);
@@ -45,6 +45,7 @@ struct Servers {
     return *s;
   }
   gonio::fuzz::FuzzDaemon& d;
+  gonio::daemon::net::NetStats stats;
   boost::asio::io_context io;
   boost::asio::executor_work_guard<boost::asio::io_context::executor_type> work;
   std::unique_ptr<gonio::daemon::net::Context> ctx;
