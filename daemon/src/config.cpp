@@ -2,6 +2,7 @@
 #include "gonio/daemon/config.hpp"
 
 #include <arpa/inet.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <fstream>
@@ -180,6 +181,77 @@ ListenUri ListenUri::parse(std::string_view text, std::string_view field) {
   return u;
 }
 
+MqttUrl MqttUrl::parse(std::string_view text, std::string_view field) {
+  const std::string f(field);
+  MqttUrl u;
+  std::string_view rest;
+  if (text.starts_with("mqtt://")) {
+    rest = text.substr(7);
+  } else if (text.starts_with("mqtts://")) {
+    u.tls = true;
+    u.port = 8883;
+    rest = text.substr(8);
+  } else {
+    throw Error::invalid(f, fmt::format("'{}' is not mqtt://HOST:PORT or mqtts://HOST:PORT", text));
+  }
+  if (!rest.empty() && rest.back() == '/') rest.remove_suffix(1);
+  std::string_view host = rest, port;
+  if (!rest.empty() && rest.front() == '[') {  // [::1]:1883
+    const auto close = rest.find(']');
+    if (close == std::string_view::npos)
+      throw Error::invalid(f, fmt::format("'{}': unclosed [ in the host", text));
+    host = rest.substr(1, close - 1);
+    if (close + 1 < rest.size()) {
+      if (rest[close + 1] != ':') throw Error::invalid(f, fmt::format("'{}': expected ]:PORT", text));
+      port = rest.substr(close + 2);
+    }
+  } else if (const auto colon = rest.rfind(':'); colon != std::string_view::npos) {
+    host = rest.substr(0, colon), port = rest.substr(colon + 1);
+  }
+  if (host.empty() || host.find_first_of("/@?# ") != std::string_view::npos)
+    throw Error::invalid(f, fmt::format("'{}': expected a host name or address", text));
+  u.host = std::string(host);
+  if (port.data() != nullptr) {
+    unsigned long p = 0;
+    if (port.empty() || port.size() > 5 ||
+        port.find_first_not_of("0123456789") != std::string_view::npos ||
+        (p = std::stoul(std::string(port))) < 1 || p > 65535)
+      throw Error::invalid(f, fmt::format("'{}': port must be 1..65535", text));
+    u.port = static_cast<std::uint16_t>(p);
+  }
+  return u;
+}
+
+std::string MqttUrl::to_string() const {
+  const auto hp = host.find(':') != std::string::npos ? fmt::format("[{}]:{}", host, port)
+                                                       : fmt::format("{}:{}", host, port);
+  return (tls ? "mqtts://" : "mqtt://") + hp;
+}
+
+void check_instrument_id(std::string_view id, std::string_view field) {
+  const bool ok = !id.empty() && id.size() <= 64 &&
+                  std::all_of(id.begin(), id.end(), [](char c) {
+                    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+                           (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-';
+                  });
+  // MQTT topic levels and archive keys: no '/', '+', '#', spaces or control characters.
+  if (!ok)
+    throw Error::invalid(std::string(field),
+                         fmt::format("'{}' must be 1 to 64 characters of A-Z a-z 0-9 . _ -", id));
+}
+
+std::string default_instrument_id() {
+  char buf[256] = {};
+  if (::gethostname(buf, sizeof buf - 1) != 0 || buf[0] == '\0') return "goniod";
+  std::string id(buf);
+  if (id.size() > 64) id.resize(64);
+  for (char& c : id)
+    if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+          c == '.' || c == '_' || c == '-'))
+      c = '-';
+  return id;
+}
+
 std::string ListenUri::to_string() const {
   const auto hp = host.find(':') != std::string::npos ? fmt::format("[{}]:{}", host, port)
                                                        : fmt::format("{}:{}", host, port);
@@ -271,6 +343,22 @@ json Config::to_json() const {
                     {"backoff_s", in_seconds(webhook_backoff)},
                     {"timeout_s", in_seconds(webhook_timeout)},
                     {"min_severity", webhook_min_severity}};
+  doc["mqtt"] = {{"url", mqtt.url},
+                 {"instrument", mqtt.instrument},
+                 {"username", mqtt.username},
+                 {"password", mqtt.password},
+                 {"qos", mqtt.qos},
+                 {"topic_prefix", mqtt.topic_prefix},
+                 {"ca_file", mqtt.ca_file},
+                 {"cert_file", mqtt.cert_file},
+                 {"key_file", mqtt.key_file},
+                 {"queue", mqtt.queue},
+                 {"keepalive_s", mqtt.keepalive_s}};
+  doc["archive"] = {{"postgres", archive.postgres},
+                    {"instrument", archive.instrument},
+                    {"batch", archive.batch},
+                    {"retry_max_s", in_seconds(archive.retry_max)},
+                    {"max_backlog_age_s", in_seconds(archive.max_backlog_age)}};
   return doc;
 }
 
@@ -486,6 +574,36 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
     r.finish();
   }
 
+  if (const json mq = table(top, "mqtt"); !mq.empty()) {
+    ObjectReader r(mq, "mqtt");
+    auto& m = c.mqtt;
+    m.url = r.optional<std::string>("url", m.url);
+    m.instrument = r.optional<std::string>("instrument", m.instrument);
+    m.username = r.optional<std::string>("username", m.username);
+    m.password = r.optional<std::string>("password", m.password);
+    m.qos = static_cast<int>(r.optional_in<long long>("qos", m.qos, 0, 2));
+    m.topic_prefix = r.optional<std::string>("topic_prefix", m.topic_prefix);
+    m.ca_file = r.optional<std::string>("ca_file", m.ca_file);
+    m.cert_file = r.optional<std::string>("cert_file", m.cert_file);
+    m.key_file = r.optional<std::string>("key_file", m.key_file);
+    m.queue = static_cast<std::size_t>(
+        r.optional_in<long long>("queue", static_cast<long long>(m.queue), 16, 1000000));
+    m.keepalive_s = static_cast<int>(r.optional_in<long long>("keepalive_s", m.keepalive_s, 5, 3600));
+    r.finish();
+  }
+
+  if (const json ar = table(top, "archive"); !ar.empty()) {
+    ObjectReader r(ar, "archive");
+    auto& a = c.archive;
+    a.postgres = r.optional<std::string>("postgres", a.postgres);
+    a.instrument = r.optional<std::string>("instrument", a.instrument);
+    a.batch = static_cast<std::size_t>(
+        r.optional_in<long long>("batch", static_cast<long long>(a.batch), 1, 5000));
+    a.retry_max = seconds_in(r, "retry_max_s", a.retry_max, 0.1, 3600);
+    a.max_backlog_age = seconds_in(r, "max_backlog_age_s", a.max_backlog_age, 1, 7 * 86400);
+    r.finish();
+  }
+
   top.finish();
   c.validate();
   return c;
@@ -516,6 +634,36 @@ void Config::validate() const {
   if (!webhook_url.empty()) {
     if (!webhook_url.starts_with("http://"))
       throw Error::invalid("webhook.url", fmt::format("'{}' must start with http://", webhook_url));
+  }
+  if (!mqtt.url.empty()) {
+    const auto u = MqttUrl::parse(mqtt.url, "mqtt.url");
+    if (!mqtt.instrument.empty()) check_instrument_id(mqtt.instrument, "mqtt.instrument");
+    // A topic prefix of one or more levels, without wildcards or empty levels.
+    const auto& p = mqtt.topic_prefix;
+    if (p.empty() || p.size() > 128 || p.front() == '/' || p.back() == '/' ||
+        p.find("//") != std::string::npos || p.find_first_of("+#") != std::string::npos ||
+        std::any_of(p.begin(), p.end(), [](char ch) { return static_cast<unsigned char>(ch) < 0x20; }))
+      throw Error::invalid("mqtt.topic_prefix",
+                           fmt::format("'{}' must be 1 to 128 characters of topic levels "
+                                       "('gonio', 'lab/gonio'), without + # or empty levels",
+                                       p));
+    if (!u.tls && (!mqtt.ca_file.empty() || !mqtt.cert_file.empty() || !mqtt.key_file.empty()))
+      throw Error::invalid("mqtt.url", fmt::format("'{}': ca_file, cert_file and key_file need "
+                                                   "mqtts://", mqtt.url));
+    if (mqtt.cert_file.empty() != mqtt.key_file.empty())
+      throw Error::invalid(mqtt.cert_file.empty() ? "mqtt.cert_file" : "mqtt.key_file",
+                           "cert_file and key_file go together");
+    if (mqtt.password.size() && mqtt.username.empty())
+      throw Error::invalid("mqtt.username", "a password needs a username");
+  } else if (!mqtt.instrument.empty() || !mqtt.username.empty() || !mqtt.ca_file.empty()) {
+    throw Error::invalid("mqtt.url", "is required when [mqtt] has other keys (mqtt://HOST:PORT)");
+  }
+  if (!archive.postgres.empty()) {
+    if (!archive.instrument.empty()) check_instrument_id(archive.instrument, "archive.instrument");
+  } else if (!archive.instrument.empty()) {
+    throw Error::invalid("archive.postgres",
+                         "is required when [archive] names an instrument (a libpq connection "
+                         "string such as 'host=db.lab dbname=gonio')");
   }
   if (!motion.empty() && !motion.contains("driver"))
     throw Error::invalid("instrument.motion.driver", "is required");

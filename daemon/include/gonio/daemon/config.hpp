@@ -49,6 +49,24 @@ struct ListenUri {
   bool loopback() const;  // host is 127.0.0.0/8, ::1 or localhost (always true for unix)
 };
 
+// The MQTT broker of [mqtt] url: mqtt://HOST:PORT (plain, port 1883 when left out) or
+// mqtts://HOST:PORT (TLS, port 8883).
+struct MqttUrl {
+  bool tls = false;
+  std::string host;
+  std::uint16_t port = 1883;
+
+  // Throws Error(invalid_argument) naming `field`.
+  static MqttUrl parse(std::string_view text, std::string_view field = "mqtt.url");
+  std::string to_string() const;
+};
+
+// An instrument id as it appears in MQTT topics and archive rows: 1..64 of [A-Za-z0-9._-].
+// Throws Error(invalid_argument) naming `field`.
+void check_instrument_id(std::string_view id, std::string_view field);
+// This host's name, made an instrument id (other characters become '-'); "goniod" if none.
+std::string default_instrument_id();
+
 struct TokenEntry {
   std::string name;    // who, for the audit log
   Role role = Role::viewer;
@@ -138,6 +156,28 @@ struct Config {
   milliseconds webhook_backoff{500};
   milliseconds webhook_timeout{5000};
   std::string webhook_min_severity = "warning";
+
+  // [mqtt] telemetry (docs/architecture.md §11); off while url is empty.
+  struct Mqtt {
+    std::string url;         // mqtt://HOST:PORT or mqtts://HOST:PORT
+    std::string instrument;  // empty: default_instrument_id()
+    std::string username, password;
+    int qos = 1;
+    std::string topic_prefix = "gonio";
+    std::string ca_file, cert_file, key_file;  // mqtts: CA (empty: the system's), client cert
+    std::size_t queue = 10000;                 // messages waiting for the broker, at most
+    int keepalive_s = 30;
+  } mqtt;
+
+  // [archive] the central PostgreSQL archive (docs/architecture.md §11); off while postgres
+  // is empty.
+  struct Archive {
+    std::string postgres;    // libpq connection string or URI
+    std::string instrument;  // empty: default_instrument_id()
+    std::size_t batch = 500;             // outbox rows per PostgreSQL transaction
+    milliseconds retry_max{10000};       // back-off cap while the server is unreachable
+    milliseconds max_backlog_age{600000};  // older unshipped rows raise a warning alert
+  } archive;
 
   // The built-in mock instrument (goniod --mock): instrument.motion and .photometer both
   // {"driver": "mock"} with the drivers' defaults.
