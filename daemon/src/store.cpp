@@ -238,6 +238,17 @@ CREATE TABLE profiles (
   created_at TEXT NOT NULL,
   profile TEXT NOT NULL);
 )sql",
+    // 3 -> 4: the archive outbox (docs/architecture.md §11). AUTOINCREMENT: a seq is never
+    // reused, even after the rows before it were shipped and removed.
+    R"sql(
+CREATE TABLE outbox (
+  seq INTEGER PRIMARY KEY AUTOINCREMENT,
+  kind TEXT NOT NULL,
+  ref INTEGER NOT NULL,
+  idx INTEGER NOT NULL DEFAULT 0,
+  at TEXT NOT NULL,
+  detail TEXT);
+)sql",
 };
 static_assert(std::size(kMigrations) == Store::kSchemaVersion);
 
@@ -439,7 +450,9 @@ Sample Store::create_sample(const SampleSpec& spec, const std::string& actor) {
       .run();
   out.id = sqlite3_last_insert_rowid(writer_->db);
   audit_in(*writer_, actor, "sample.create", fmt::format("sample:{}", out.id), json(spec));
+  outbox_in(OutboxRow::Kind::sample, out.id, 0);
   t.commit();
+  outbox_written();
   return out;
 }
 
@@ -512,7 +525,9 @@ Scan Store::insert_scan(const ScanPlan& plan, bool predicted, const std::string&
            json{{"sample", plan.sample_id},
                 {"points", sc.points_total},
                 {"priority", plan.priority}});
+  outbox_in(OutboxRow::Kind::scan, sc.id, 0, json{{"state", "queued"}, {"reason", ""}});
   t.commit();
+  outbox_written();
   return sc;
 }
 
@@ -603,7 +618,9 @@ void Store::set_scan_state(std::int64_t id, ScanState state, const std::string& 
       .run();
   audit_in(*writer_, actor, "scan.state", fmt::format("scan:{}", id),
            json{{"from", old}, {"to", to_text(state)}, {"reason", reason}});
+  outbox_in(OutboxRow::Kind::scan, id, 0, json{{"state", to_text(state)}, {"reason", reason}});
   t.commit();
+  outbox_written();
 }
 
 void Store::reorder(std::int64_t id, std::size_t position, const std::string& actor) {
@@ -639,8 +656,10 @@ std::vector<std::int64_t> Store::recover_running(const std::string& reason) {
         .run();
     audit_in(*writer_, "goniod", "scan.state", fmt::format("scan:{}", id),
              json{{"from", "running"}, {"to", "interrupted"}, {"reason", reason}});
+    outbox_in(OutboxRow::Kind::scan, id, 0, json{{"state", "interrupted"}, {"reason", reason}});
   }
   t.commit();
+  if (!ids.empty()) outbox_written();
   return ids;
 }
 
@@ -671,7 +690,9 @@ void Store::insert_point(const PointRecord& p, const std::string& data) {
       .bind(1, std::int64_t{p.diverged ? 1 : 0})
       .bind(2, p.scan_id)
       .run();
+  outbox_in(OutboxRow::Kind::point, p.scan_id, p.index);
   t.commit();
+  outbox_written();
 }
 
 std::vector<std::string> Store::point_json(std::int64_t scan_id, std::size_t offset,
@@ -754,7 +775,9 @@ Alert Store::raise_alert(const AlertDraft& d, bool* created) {
     s.step();
     a = read_alert(s);
   }
+  outbox_in(OutboxRow::Kind::alert, id, 0);
   t.commit();
+  outbox_written();
   if (created) *created = !open;
   return a;
 }
@@ -804,7 +827,9 @@ Alert Store::ack_alert(std::int64_t id, const std::string& actor) {
         .bind(3, id)
         .run();
     audit_in(*writer_, actor, "alert.ack", fmt::format("alert:{}", id), json::object());
+    outbox_in(OutboxRow::Kind::alert, id, 0);
     t.commit();
+    outbox_written();
   }
   return *alert(id);
 }
@@ -812,11 +837,116 @@ Alert Store::ack_alert(std::int64_t id, const std::string& actor) {
 Alert Store::set_alert_message(std::int64_t id, const std::string& message) {
   {
     std::lock_guard lock(write_mu_);
+    Transaction t(*writer_);
     Stmt s(*writer_, "UPDATE alerts SET message = ? WHERE id = ?");
     s.bind(1, message).bind(2, id).run();
     if (sqlite3_changes(writer_->db) == 0) throw Error::not_found("alert", fmt::format("alert {}", id));
+    outbox_in(OutboxRow::Kind::alert, id, 0);
+    t.commit();
+    outbox_written();
   }
   return *alert(id);
+}
+
+// ---- archive outbox --------------------------------------------------------------------
+
+// With the write lock held, inside the caller's transaction.
+void Store::outbox_in(OutboxRow::Kind kind, std::int64_t ref, std::int64_t idx,
+                      const json& detail) {
+  if (!outbox_on_.load(std::memory_order_relaxed)) return;
+  Stmt(*writer_, "INSERT INTO outbox(kind, ref, idx, at, detail) VALUES (?, ?, ?, ?, ?)")
+      .bind(1, std::string(to_text(kind)))
+      .bind(2, ref)
+      .bind(3, idx)
+      .bind(4, utc::now())
+      .bind(5, detail.is_null() ? std::optional<std::string>() : std::optional(detail.dump()))
+      .run();
+}
+
+void Store::outbox_written() {
+  if (!outbox_on_.load(std::memory_order_relaxed)) return;
+  std::lock_guard lock(listener_mu_);
+  if (outbox_listener_) outbox_listener_();
+}
+
+void Store::set_outbox_listener(std::function<void()> f) {
+  std::lock_guard lock(listener_mu_);
+  outbox_listener_ = std::move(f);
+}
+
+std::vector<OutboxRow> Store::outbox_batch(std::size_t limit) const {
+  auto c = read();
+  Stmt s(*c, "SELECT o.seq, o.kind, o.ref, o.idx, o.at, o.detail, p.data FROM outbox o "
+             "LEFT JOIN points p ON o.kind = 'point' AND p.scan_id = o.ref AND p.idx = o.idx "
+             "ORDER BY o.seq LIMIT ?");
+  s.bind(1, limit);
+  std::vector<OutboxRow> out;
+  out.reserve(std::min<std::size_t>(limit, 4096));
+  while (s.step()) {
+    OutboxRow r;
+    r.seq = s.i64(0);
+    r.kind = parse_enum<OutboxRow::Kind>(s.text(1), "outbox.kind");
+    r.ref = s.i64(2);
+    r.idx = s.i64(3);
+    r.at = s.text(4);
+    if (const auto d = s.opt_text(5)) r.detail = json::parse(*d, nullptr, false);
+    if (r.kind == OutboxRow::Kind::point) r.point_json = s.text(6);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+void Store::outbox_remove(std::int64_t first_seq, std::int64_t last_seq) {
+  std::lock_guard lock(write_mu_);
+  Stmt(*writer_, "DELETE FROM outbox WHERE seq BETWEEN ? AND ?").bind(1, first_seq).bind(2, last_seq).run();
+}
+
+OutboxStats Store::outbox_stats() const {
+  auto c = read();
+  OutboxStats st;
+  // seq order is write order, so the first row is the oldest; MAX - MIN would overcount
+  // after a partial removal, COUNT(*) is exact and the outbox stays small when shipping.
+  Stmt s(*c, "SELECT COUNT(*), (SELECT at FROM outbox ORDER BY seq LIMIT 1) FROM outbox");
+  if (s.step()) {
+    st.rows = s.i64(0);
+    st.oldest_at = s.opt_text(1);
+  }
+  return st;
+}
+
+std::size_t Store::outbox_reship(std::int64_t scan_id, const std::string& actor) {
+  std::size_t added = 0;
+  {
+    std::lock_guard lock(write_mu_);
+    Transaction t(*writer_);
+    std::int64_t sample_id = 0;
+    {
+      Stmt s(*writer_, "SELECT sample_id FROM scans WHERE id = ?");
+      s.bind(1, scan_id);
+      if (!s.step()) throw Error::not_found("scan", fmt::format("scan {}", scan_id));
+      sample_id = s.i64(0);
+    }
+    const auto now = utc::now();
+    Stmt(*writer_, "INSERT INTO outbox(kind, ref, idx, at) VALUES ('sample', ?, 0, ?), "
+                   "('scan', ?, 0, ?)")
+        .bind(1, sample_id)
+        .bind(2, now)
+        .bind(3, scan_id)
+        .bind(4, now)
+        .run();
+    Stmt(*writer_, "INSERT INTO outbox(kind, ref, idx, at) SELECT 'point', scan_id, idx, ? "
+                   "FROM points WHERE scan_id = ? ORDER BY idx")
+        .bind(1, now)
+        .bind(2, scan_id)
+        .run();
+    added = 2 + static_cast<std::size_t>(sqlite3_changes(writer_->db));
+    audit_in(*writer_, actor, "archive.reship", fmt::format("scan:{}", scan_id),
+             json{{"rows", added}});
+    t.commit();
+  }
+  std::lock_guard lock(listener_mu_);
+  if (outbox_listener_) outbox_listener_();
+  return added;
 }
 
 // ---- audit -----------------------------------------------------------------------------

@@ -87,7 +87,7 @@ TEST_F(StoreTest, MigratesAVersion2StoreKeepingItsRowsAndAddingFitsAndProfiles) 
   sqlite3_close(db);
 
   Store s(file_);
-  EXPECT_EQ(s.schema_version(), 3);
+  EXPECT_EQ(s.schema_version(), Store::kSchemaVersion);
   const auto white = s.sample_by_name("white");
   ASSERT_TRUE(white.has_value());
   EXPECT_EQ(white->spec.bsdf, "lambert:albedo=0.9");

@@ -3,7 +3,8 @@
 // Tables: samples, scans (plan as JSON, state, queue position), points (one row per
 // measured point, primary key (scan_id, idx), so a point can never be stored twice),
 // alerts, audit (who did what, when), tokens (hashes only), fits (inverse-twin results per
-// scan) and profiles (calibrated instrument profiles, versioned). The schema version is
+// scan), profiles (calibrated instrument profiles, versioned) and outbox (what the central
+// archive has not yet committed). The schema version is
 // PRAGMA user_version; migrations run in order inside a transaction at open, and a file
 // written by a newer goniod is refused rather than guessed at.
 //
@@ -13,7 +14,9 @@
 // reads use a small pool of their own connections, which WAL lets run beside a writer.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <functional>
 #include <filesystem>
 #include <memory>
 #include <mutex>
@@ -24,6 +27,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gonio/daemon/config.hpp"
+#include "gonio/proto/enum_text.hpp"
 #include "gonio/proto/alert.hpp"
 #include "gonio/proto/point.hpp"
 #include "gonio/proto/sample.hpp"
@@ -70,6 +74,32 @@ struct StoredProfile {
   nlohmann::json profile;  // gonio::twin::InstrumentProfile as JSON
 };
 
+// One row of the archive outbox (docs/architecture.md §11): something committed locally that
+// the archive shipper owes the central archive. Rows are written in the same transaction as
+// what they mirror and leave only when the archive has committed them.
+struct OutboxRow {
+  enum class Kind { sample, scan, point, alert };
+  std::int64_t seq = 0;     // increasing, never reused: the shipping order
+  Kind kind = Kind::point;
+  std::int64_t ref = 0;     // sample id, scan id (scan, point) or alert id
+  std::int64_t idx = 0;     // point index (point rows)
+  std::string at;           // when it was written (UTC ISO-8601)
+  nlohmann::json detail;    // scan rows: the state change {state, reason}; else null
+  std::string point_json;   // point rows: the stored point (joined when read)
+};
+inline constexpr EnumNames<OutboxRow::Kind, 4> kOutboxKindNames{{
+    {OutboxRow::Kind::sample, "sample"},
+    {OutboxRow::Kind::scan, "scan"},
+    {OutboxRow::Kind::point, "point"},
+    {OutboxRow::Kind::alert, "alert"},
+}};
+constexpr const auto& enum_names(OutboxRow::Kind) { return kOutboxKindNames; }
+
+struct OutboxStats {
+  std::int64_t rows = 0;             // waiting
+  std::optional<std::string> oldest_at;  // of the oldest waiting row
+};
+
 struct ScanFilter {
   std::optional<ScanState> state;
   std::optional<std::int64_t> sample_id;
@@ -85,7 +115,7 @@ struct AlertFilter {
 
 class Store {
  public:
-  static constexpr int kSchemaVersion = 3;
+  static constexpr int kSchemaVersion = 4;
 
   // Opens (creating) the database; runs migrations. Throws Error(io_error) when the file
   // cannot be opened, Error(unsupported) when it is newer than this build.
@@ -166,6 +196,23 @@ class Store {
                                std::optional<std::int64_t> fit_id, const std::string& actor);
   std::optional<StoredProfile> latest_profile() const;
 
+  // ---- archive outbox (docs/architecture.md §11)
+  // While on, every committed sample, scan (and state change), point and alert also writes
+  // an outbox row in its own transaction. Off by default: goniod turns it on with [archive].
+  void set_outbox(bool on) noexcept { outbox_on_.store(on); }
+  bool outbox() const noexcept { return outbox_on_.load(); }
+  // Called after each transaction that wrote outbox rows, with the write lock held: it must
+  // only wake someone, never call back into the store.
+  void set_outbox_listener(std::function<void()> f);
+  // The oldest `limit` rows, in seq order, points with their stored JSON.
+  std::vector<OutboxRow> outbox_batch(std::size_t limit) const;
+  // Removes rows first_seq..last_seq (what one batch shipped).
+  void outbox_remove(std::int64_t first_seq, std::int64_t last_seq);
+  OutboxStats outbox_stats() const;
+  // Queues scan `id` again: its sample, the scan and every stored point (re-ship). Returns
+  // the rows added. Throws Error(not_found).
+  std::size_t outbox_reship(std::int64_t scan_id, const std::string& actor);
+
   // ---- audit
   void audit(const std::string& actor, const std::string& action, const std::string& target,
              const nlohmann::json& detail = nlohmann::json::object());
@@ -182,6 +229,9 @@ class Store {
   class ReadLease;
   ReadLease read() const;
   void migrate();
+  void outbox_in(OutboxRow::Kind kind, std::int64_t ref, std::int64_t idx,
+                 const nlohmann::json& detail = nullptr);
+  void outbox_written();
 
   std::filesystem::path path_;
   bool synchronous_full_;
@@ -189,6 +239,9 @@ class Store {
   std::unique_ptr<Connection> writer_;
   mutable std::mutex pool_mu_;
   mutable std::vector<std::unique_ptr<Connection>> readers_;
+  std::atomic<bool> outbox_on_{false};
+  std::mutex listener_mu_;
+  std::function<void()> outbox_listener_;
 };
 
 }  // namespace gonio::daemon
