@@ -13,6 +13,8 @@ find_package(OpenSSL REQUIRED)  # SHA-256 and constant-time compare of bearer to
 pkg_check_modules(MODBUS REQUIRED IMPORTED_TARGET libmodbus)
 pkg_check_modules(LIBUSB REQUIRED IMPORTED_TARGET libusb-1.0)
 pkg_check_modules(SYSTEMD REQUIRED IMPORTED_TARGET libsystemd)
+pkg_check_modules(MOSQUITTO REQUIRED IMPORTED_TARGET libmosquitto)
+pkg_check_modules(PQ REQUIRED IMPORTED_TARGET libpq)
 pkg_check_modules(CAIRO REQUIRED IMPORTED_TARGET cairo)
 # Levenberg–Marquardt of the inverse twin (gonio-twin fit / calibrate): Eigen's unsupported
 # LevenbergMarquardt module, header-only.
