@@ -65,8 +65,19 @@ void Hub::deliver(const std::vector<std::shared_ptr<rpc::Session>>& to,
   }
 }
 
+void Hub::set_tap(Tap tap) {
+  std::lock_guard lock(mu_);
+  tap_ = tap ? std::make_shared<const Tap>(std::move(tap)) : nullptr;
+}
+
 void Hub::publish(Topic topic, std::string_view method, const nlohmann::json& params,
                   std::optional<std::int64_t> scan) {
+  std::shared_ptr<const Tap> tap;
+  {
+    std::lock_guard lock(mu_);
+    tap = tap_;
+  }
+  if (tap) (*tap)(method, params.dump(), scan);
   const auto to = targets(topic, scan);
   if (to.empty()) return;
   deliver(to, std::make_shared<const std::string>(rpc::notification(method, params)));
@@ -74,6 +85,12 @@ void Hub::publish(Topic topic, std::string_view method, const nlohmann::json& pa
 
 void Hub::publish_raw(Topic topic, std::string_view method, const std::string& params_json,
                       std::optional<std::int64_t> scan) {
+  std::shared_ptr<const Tap> tap;
+  {
+    std::lock_guard lock(mu_);
+    tap = tap_;
+  }
+  if (tap) (*tap)(method, params_json, scan);
   const auto to = targets(topic, scan);
   if (to.empty()) return;
   std::string text = R"({"jsonrpc":"2.0","method":)";

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -56,6 +57,13 @@ class Hub {
   void publish_raw(Topic topic, std::string_view method, const std::string& params_json,
                    std::optional<std::int64_t> scan = std::nullopt);
 
+  // Receives every notification published, subscribers or not, with its params as JSON
+  // text (MQTT mirrors the hub through this). Called on the publishing thread: it must not
+  // block.
+  using Tap = std::function<void(std::string_view method, const std::string& params_json,
+                                 std::optional<std::int64_t> scan)>;
+  void set_tap(Tap tap);
+
   std::size_t sessions() const;
   std::uint64_t dropped() const;  // notifications refused by full or closed sessions
 
@@ -72,6 +80,7 @@ class Hub {
   mutable std::mutex mu_;
   std::map<std::uint64_t, Entry> entries_;
   std::uint64_t dropped_ = 0;
+  std::shared_ptr<const Tap> tap_;
 };
 
 }  // namespace gonio::daemon
