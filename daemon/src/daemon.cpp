@@ -25,12 +25,14 @@
 #include <spdlog/spdlog.h>
 
 #include "gonio/daemon/alerts.hpp"
+#include "gonio/daemon/archive.hpp"
 #include "gonio/daemon/auth.hpp"
 #include "gonio/daemon/config.hpp"
 #include "gonio/daemon/diagnosis.hpp"
 #include "gonio/daemon/hub.hpp"
 #include "gonio/daemon/instrument.hpp"
 #include "gonio/daemon/methods.hpp"
+#include "gonio/daemon/mqtt.hpp"
 #include "gonio/daemon/net.hpp"
 #include "gonio/daemon/rpc.hpp"
 #include "gonio/daemon/store.hpp"
@@ -208,6 +210,8 @@ int run_daemon(const DaemonOptions& o) {
     fs::create_directories(state, ec);
     if (ec) throw Error(Errc::io_error, fmt::format("cannot create {}: {}", state.string(), ec.message()));
     store = std::make_unique<Store>(state / "goniod.db", config.synchronous_full);
+    // Before anything is written, so that the archive sees every change of this run.
+    store->set_outbox(!config.archive.postgres.empty());
     for (auto id : store->recover_running("goniod was stopped uncleanly during the scan; resumes "
                                           "at the next unmeasured point"))
       spdlog::warn("scan {} was running when goniod last stopped; it resumes first", id);
@@ -226,6 +230,34 @@ int run_daemon(const DaemonOptions& o) {
     Hub hub;
     AlertService alerts(*store, hub, parse_enum<Severity>(config.webhook_min_severity, "webhook.min_severity"));
     Instrument instrument(config, *store, twin, alerts, hub);
+
+    // ---- central archive and MQTT telemetry (both off unless configured)
+    std::unique_ptr<ArchiveShipper> archive;
+    if (!config.archive.postgres.empty())
+      archive = std::make_unique<ArchiveShipper>(
+          config.archive,
+          config.archive.instrument.empty() ? default_instrument_id() : config.archive.instrument,
+          *store, &alerts);
+    std::unique_ptr<MqttPublisher> mqtt;
+    if (!config.mqtt.url.empty())
+      mqtt = std::make_unique<MqttPublisher>(
+          config.mqtt, config.mqtt.instrument.empty() ? default_instrument_id() : config.mqtt.instrument,
+          [&instrument] { return instrument.status().dump(); });
+    // Unhooks the publisher from the hub before it goes, however this scope is left.
+    struct Untap {
+      Hub& hub;
+      ~Untap() { hub.set_tap(nullptr); }
+    } untap{hub};
+    if (mqtt) {
+      hub.set_tap([p = mqtt.get()](std::string_view method, const std::string& params,
+                                   std::optional<std::int64_t> scan) { p->publish(method, params, scan); });
+      mqtt->start();
+      spdlog::info("mqtt: publishing to {} under {}", config.mqtt.url, mqtt->topics().base());
+    }
+    if (archive) {
+      archive->start();
+      spdlog::info("archive: shipping to PostgreSQL as instrument '{}'", archive->instrument());
+    }
 
     asio::io_context io;
     asio::thread_pool workers(config.rpc_threads);
@@ -255,7 +287,9 @@ int run_daemon(const DaemonOptions& o) {
                       [&listeners](const std::string& name) {
                         for (const auto& l : listeners) l->end_sessions_of(name);
                       },
-                      config.twin_data_dir.empty() ? state / "data" : fs::path(config.twin_data_dir)};
+                      config.twin_data_dir.empty() ? state / "data" : fs::path(config.twin_data_dir),
+                      archive.get(),
+                      mqtt.get()};
     register_methods(dispatcher, services);
 
     // ---- listeners: the state dir's socket always, then the configured ones.
@@ -357,6 +391,9 @@ int run_daemon(const DaemonOptions& o) {
     control.join();
     workers.join();
     alerts.set_sink(nullptr);
+    hub.set_tap(nullptr);
+    if (mqtt) mqtt->stop();
+    if (archive) archive->stop();
     store->audit("goniod", "daemon.stop", "", json::object());
     spdlog::info("goniod stopped cleanly");
     return exit_code::ok;

@@ -16,6 +16,7 @@ void register_methods(rpc::Dispatcher& d, Services& s) {
   register_scan(reg, s);
   register_queue(reg, s);
   register_alert(reg, s);
+  register_archive(reg, s);
   register_twin(reg, s);
   register_subscribe(reg, s);
   reg.finish();

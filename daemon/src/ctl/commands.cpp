@@ -87,6 +87,7 @@ int gonioctl_main(int argc, char** argv) {
   ctl::add_scan_commands(app, ctx);
   ctl::add_queue_commands(app, ctx);
   ctl::add_alert_commands(app, ctx);
+  ctl::add_archive_commands(app, ctx);
   ctl::add_twin_commands(app, ctx);
   ctl::add_token_commands(app, ctx);
   ctl::add_demo_commands(app, ctx);

@@ -35,6 +35,7 @@ void register_sample(MethodRegistrar& r, Services& s);      // sample.*
 void register_scan(MethodRegistrar& r, Services& s);        // scan.*
 void register_queue(MethodRegistrar& r, Services& s);       // queue.*
 void register_alert(MethodRegistrar& r, Services& s);       // alert.*
+void register_archive(MethodRegistrar& r, Services& s);     // archive.*
 void register_twin(MethodRegistrar& r, Services& s);        // twin.*
 void register_subscribe(MethodRegistrar& r, Services& s);   // subscribe, unsubscribe
 

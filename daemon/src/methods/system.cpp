@@ -116,6 +116,8 @@ void register_system(MethodRegistrar& reg, Services& s) {
       if (c.principal.role < Role::admin && hook.contains("url")) hook["url"] = webhook_host(hook["url"]);
       (out += R"(,"webhook":)") += hook.dump();
     }
+    if (s.mqtt) (out += R"(,"mqtt":)") += s.mqtt->status().dump();
+    if (s.archive) (out += R"(,"archive":)") += s.archive->status().dump();
     if (s.transport_stats) (out += R"(,"transport":)") += s.transport_stats().dump();
     if (s.net_stats) (out += R"(,"net":)") += s.net_stats().dump();
     out += '}';

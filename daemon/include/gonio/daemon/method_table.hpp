@@ -62,6 +62,9 @@ inline constexpr std::array kMethodTable{
     // alerts
     MethodSpec{"alert.list", Role::viewer, false},
     MethodSpec{"alert.ack", Role::technician, false},
+    // central archive
+    MethodSpec{"archive.status", Role::viewer, false},
+    MethodSpec{"archive.reship", Role::technician, true},
     // twin
     MethodSpec{"twin.predict", Role::technician, true},
     // subscriptions

@@ -10,6 +10,8 @@
 #include <nlohmann/json.hpp>
 
 #include "gonio/daemon/alerts.hpp"
+#include "gonio/daemon/archive.hpp"
+#include "gonio/daemon/mqtt.hpp"
 #include "gonio/daemon/auth.hpp"
 #include "gonio/daemon/config.hpp"
 #include "gonio/daemon/hub.hpp"
@@ -40,6 +42,8 @@ struct Services {
   std::function<nlohmann::json()> net_stats;        // budgets and dropped peers (net::NetStats)
   std::function<void(const std::string&)> end_sessions_of;  // a token was revoked
   std::filesystem::path data_dir;  // where BSDF specs' '@file' names may point (twin.data_dir)
+  ArchiveShipper* archive = nullptr;  // null: no [archive]
+  MqttPublisher* mqtt = nullptr;      // null: no [mqtt]
 };
 
 void register_methods(rpc::Dispatcher& d, Services& s);
