@@ -44,6 +44,18 @@ struct ArchiveShipper::Pg {
     }
     PQclear(r);
   }
+  // Several statements in one text (a migration): the simple query protocol, no parameters.
+  void exec_script(const std::string& sql, std::string_view what) {
+    PGresult* r = PQexec(conn, sql.c_str());
+    const auto st = PQresultStatus(r);
+    if (st != PGRES_COMMAND_OK && st != PGRES_TUPLES_OK) {
+      std::string msg = PQresultErrorMessage(r);
+      PQclear(r);
+      while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
+      throw Error(Errc::io_error, fmt::format("archive: {}: {}", what, msg));
+    }
+    PQclear(r);
+  }
   std::optional<std::string> scalar(const std::string& sql) {
     PGresult* r = PQexec(conn, sql.c_str());
     if (PQresultStatus(r) != PGRES_TUPLES_OK) {
@@ -124,7 +136,7 @@ int ArchiveShipper::migrate() {
                               "understands ({}); use a newer goniod", version, kArchiveSchemaVersion));
     const auto& m = archive_migrations();
     for (; version < kArchiveSchemaVersion; ++version) {
-      pg.exec(m[static_cast<std::size_t>(version)], {}, fmt::format("migration to version {}", version + 1));
+      pg.exec_script(m[static_cast<std::size_t>(version)], fmt::format("migration to version {}", version + 1));
       pg.exec("INSERT INTO gonio_archive_schema (version) VALUES ($1)", {std::to_string(version + 1)},
               "schema version");
       spdlog::info("archive: migrated the archive to schema version {}", version + 1);
