@@ -1,0 +1,314 @@
+// MQTT telemetry and the central archive against the real servers: a Mosquitto broker and a
+// PostgreSQL cluster started by the test, three mock goniods publishing and archiving at
+// once, the broker killed and restarted, PostgreSQL stopped and restarted and one goniod
+// SIGKILLed, all mid-scan. Afterwards the archive holds every point exactly once and the
+// retained topics are current. Skipped where the servers are not installed.
+#include <gtest/gtest.h>
+#include <pwd.h>
+#include <sys/stat.h>
+
+#include <array>
+#include <cstdio>
+#include <map>
+
+#include "../daemon/harness.hpp"
+
+namespace gonio::test {
+namespace {
+
+const std::string kPgBin = "/usr/lib/postgresql/15/bin";
+
+int free_port() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
+  socklen_t n = sizeof a;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &n);
+  ::close(fd);
+  return ntohs(a.sin_port);
+}
+
+// Output of a shell command (stdout), and its exit status.
+std::pair<int, std::string> run(const std::string& cmd) {
+  std::string out;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  if (!p) return {-1, out};
+  std::array<char, 4096> buf{};
+  while (const auto n = std::fread(buf.data(), 1, buf.size(), p)) out.append(buf.data(), n);
+  const int st = ::pclose(p);
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+}
+
+// A PostgreSQL cluster in a temporary directory, listening on a Unix socket only. As root it
+// runs as the 'postgres' account (the server refuses root).
+class Postgres {
+ public:
+  explicit Postgres(const fs::path& dir) : dir_(dir), port_(free_port()) {
+    const bool root = ::geteuid() == 0;
+    if (root) {
+      if (!::getpwnam("postgres")) throw std::runtime_error("no 'postgres' account");
+      as_ = "runuser -u postgres -- ";
+    }
+    fs::create_directories(dir_ / "sock");
+    ::chmod(dir_.parent_path().c_str(), 0755);
+    ::chmod(dir_.c_str(), 0755);
+    if (root) run("chown -R postgres: '" + dir_.string() + "'");
+    const auto [rc, out] = run(as_ + kPgBin + "/initdb --no-sync -A trust -U postgres -D '" +
+                               (dir_ / "data").string() + "' > '" + (dir_ / "initdb.log").string() + "' 2>&1");
+    if (rc != 0) throw std::runtime_error("initdb failed: " + read(dir_ / "initdb.log"));
+    start();
+  }
+  ~Postgres() { stop(); }
+  void start() {
+    const auto [rc, out] = run(as_ + kPgBin + "/pg_ctl -w -D '" + (dir_ / "data").string() + "' -l '" +
+                               (dir_ / "server.log").string() + "' -o \"-p " + std::to_string(port_) +
+                               " -k '" + (dir_ / "sock").string() +
+                               "' -c listen_addresses='' -c fsync=off -c max_connections=30\" start 2>&1");
+    if (rc != 0) throw std::runtime_error("pg_ctl start failed: " + out + read(dir_ / "server.log"));
+    running_ = true;
+  }
+  void stop() {
+    if (!running_) return;
+    run(as_ + kPgBin + "/pg_ctl -w -m fast -D '" + (dir_ / "data").string() + "' stop > /dev/null 2>&1");
+    running_ = false;
+  }
+  std::string conninfo() const {
+    return "host=" + (dir_ / "sock").string() + " port=" + std::to_string(port_) +
+           " user=postgres dbname=postgres";
+  }
+  // psql -At: rows as lines, columns by '|'.
+  std::string query(const std::string& sql) const {
+    const auto [rc, out] = run("psql \"" + conninfo() + "\" -v ON_ERROR_STOP=1 -At -c \"" + sql + "\" 2>&1");
+    if (rc != 0) throw std::runtime_error("psql: " + out);
+    return out;
+  }
+
+ private:
+  static std::string read(const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  }
+  fs::path dir_;
+  int port_;
+  std::string as_;
+  bool running_ = false;
+};
+
+// A Mosquitto broker on a loopback port, without persistence: a restart forgets every
+// retained message, which goniod must publish again.
+class Broker {
+ public:
+  explicit Broker(const fs::path& dir) : dir_(dir), port_(free_port()) {
+    fs::create_directories(dir_);
+    ::chmod(dir_.c_str(), 0755);
+    std::ofstream(dir_ / "mosquitto.conf") << "listener " << port_ << " 127.0.0.1\n"
+                                           << "allow_anonymous true\npersistence false\n";
+    start();
+  }
+  ~Broker() { kill(); }
+  void start() {
+    pid_ = ::fork();
+    if (pid_ == 0) {
+      const int fd = ::open((dir_ / "mosquitto.log").c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+      ::dup2(fd, 1), ::dup2(fd, 2);
+      const auto conf = (dir_ / "mosquitto.conf").string();
+      ::execlp("mosquitto", "mosquitto", "-c", conf.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    if (!eventually([&] {
+          try {
+            Conn c(connect_tcp("127.0.0.1", port_));
+            return true;
+          } catch (const std::exception&) {
+            return false;
+          }
+        }, 10s))
+      throw std::runtime_error("mosquitto did not come up");
+  }
+  void kill() {
+    if (pid_ <= 0) return;
+    ::kill(pid_, SIGKILL);
+    ::waitpid(pid_, nullptr, 0);
+    pid_ = -1;
+  }
+  int port() const { return port_; }
+  // Every retained message under `filter`: topic → payload.
+  std::map<std::string, std::string> retained(const std::string& filter) const {
+    const auto [rc, out] = run("mosquitto_sub -h 127.0.0.1 -p " + std::to_string(port_) + " -t '" + filter +
+                               "' --retained-only -v -W 2 2>/dev/null");
+    std::map<std::string, std::string> m;
+    std::istringstream in(out);
+    for (std::string line; std::getline(in, line);) {
+      const auto sp = line.find(' ');
+      if (sp != std::string::npos) m[line.substr(0, sp)] = line.substr(sp + 1);
+    }
+    return m;
+  }
+
+ private:
+  fs::path dir_;
+  int port_;
+  pid_t pid_ = -1;
+};
+
+bool servers_installed() {
+  return fs::exists(kPgBin + "/initdb") && run("command -v mosquitto mosquitto_sub psql > /dev/null").first == 0;
+}
+
+std::string node_config(const std::string& instrument, int broker_port, const std::string& conninfo) {
+  MockOptions o;
+  o.time_scale = 0.3;  // about 120 ms of motion and integration per point
+  o.tcp = o.http = false;
+  o.extra = "[mqtt]\nurl = \"mqtt://127.0.0.1:" + std::to_string(broker_port) + "\"\ninstrument = \"" +
+            instrument + "\"\nkeepalive_s = 5\n\n[archive]\npostgres = \"" + conninfo +
+            "\"\ninstrument = \"" + instrument + "\"\nretry_max_s = 0.5\nbatch = 50\n";
+  return mock_config(o);
+}
+
+std::int64_t points_done(Goniod& g, std::int64_t scan) {
+  auto c = g.unix_conn();
+  return c.call("scan.get", json{{"scan", scan}})["points_done"].get<std::int64_t>();
+}
+
+json info(Goniod& g) { return g.unix_conn().call("system.info"); }
+
+TEST(Archive, ThreeInstrumentsThroughBrokerAndDatabaseOutagesAndAKill) {
+  if (!servers_installed()) GTEST_SKIP() << "mosquitto, mosquitto_sub, psql or PostgreSQL 15 not installed";
+  TempDir dir;
+  Postgres pg(dir.path / "pg");
+  Broker broker(dir.path / "mqtt");
+
+  const std::vector<std::string> names{"gcms-a", "gcms-b", "gcms-c"};
+  std::vector<std::unique_ptr<Goniod>> nodes;
+  std::vector<std::int64_t> scans;
+  for (const auto& n : names) {
+    nodes.push_back(std::make_unique<Goniod>(dir.path / n, node_config(n, broker.port(), pg.conninfo())));
+    auto c = nodes.back()->unix_conn();
+    // 61 points each: long enough for every outage below to fall inside the scan.
+    scans.push_back(submit(c, "tile", kTrueSample, json{{"grids", {"in=45;out=-30:60:1.5"}}}));
+  }
+  const auto progress = [&](std::size_t i) { return points_done(*nodes[i], scans[i]); };
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    ASSERT_TRUE(eventually([&] { return progress(i) >= 3; }, 30s)) << nodes[i]->log_text();
+
+  // The broker dies mid-scan: the scans go on while it is away.
+  broker.kill();
+  {
+    const auto before = progress(0);
+    ASSERT_TRUE(eventually([&] { return progress(0) >= before + 3; }, 30s)) << nodes[0]->log_text();
+    EXPECT_FALSE(info(*nodes[0])["mqtt"]["connected"].get<bool>());
+  }
+  broker.start();
+
+  // PostgreSQL stops mid-scan: points are committed locally and wait in the outbox.
+  pg.stop();
+  {
+    const auto before = progress(1);
+    ASSERT_TRUE(eventually([&] { return progress(1) >= before + 3; }, 30s)) << nodes[1]->log_text();
+    ASSERT_TRUE(eventually([&] { return info(*nodes[1])["archive"]["backlog"].get<int>() > 0; }, 10s));
+    EXPECT_FALSE(info(*nodes[1])["archive"]["connected"].get<bool>());
+  }
+  // … and one goniod is killed while the archive is down, then comes back.
+  EXPECT_EQ(nodes[2]->stop(SIGKILL), 128 + SIGKILL);
+  nodes[2]->start();
+  pg.start();
+
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    auto c = nodes[i]->unix_conn();
+    const auto sc = wait_state(c, scans[i], {"completed"}, 120s);
+    ASSERT_EQ(sc["state"], "completed") << nodes[i]->log_text();
+  }
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    ASSERT_TRUE(eventually([&] {
+      const auto a = info(*nodes[i])["archive"];
+      return a["backlog"].get<int>() == 0 && a["connected"].get<bool>();
+    }, 60s)) << names[i] << ": " << info(*nodes[i])["archive"].dump();
+
+  // Every point exactly once (the key makes twice impossible; count and range show none
+  // is missing), each scan's final state and its history.
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const auto id = std::to_string(scans[i]);
+    const auto where = " WHERE instrument = '" + names[i] + "' AND scan_id = " + id;
+    EXPECT_EQ(pg.query("SELECT count(*), count(DISTINCT idx), min(idx), max(idx) FROM points" + where),
+              "61|61|0|60\n") << names[i];
+    EXPECT_EQ(pg.query("SELECT state, points_done FROM scans" + where), "completed|61\n") << names[i];
+    const auto history = pg.query("SELECT string_agg(state, ',' ORDER BY seq) FROM scan_states" + where);
+    EXPECT_TRUE(history.starts_with("queued,running")) << history;
+    EXPECT_TRUE(history.ends_with("completed\n")) << history;
+    // The view a lab queries: the sample's points across instruments.
+    EXPECT_EQ(pg.query("SELECT count(*) FROM sample_points WHERE sample = 'tile' AND instrument = '" +
+                       names[i] + "'"),
+              "61\n");
+  }
+  const auto killed = pg.query("SELECT string_agg(state, ',' ORDER BY seq) FROM scan_states WHERE instrument = "
+                               "'gcms-c' AND scan_id = " + std::to_string(scans[2]));
+  EXPECT_NE(killed.find("interrupted"), std::string::npos) << killed;
+  EXPECT_EQ(pg.query("SELECT count(*) FROM instruments"), "3\n");
+
+  // The retained topics are current although the broker forgot them when it restarted.
+  ASSERT_TRUE(eventually([&] {
+    const auto r = broker.retained("gonio/#");
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      const auto st = r.find("gonio/" + names[i] + "/state");
+      const auto sc = r.find("gonio/" + names[i] + "/scan/" + std::to_string(scans[i]));
+      if (st == r.end() || sc == r.end()) return false;
+      if (json::parse(st->second)["state"] == "offline") return false;
+      if (json::parse(sc->second)["state"] != "completed") return false;
+    }
+    return true;
+  }, 20s));
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const auto m = info(*nodes[i])["mqtt"];
+    EXPECT_TRUE(m["connected"].get<bool>());
+    EXPECT_TRUE(m.contains("dropped"));
+  }
+
+  // A clean stop leaves `offline` on the state topic; so does a SIGKILL, through the will.
+  nodes[0]->stop(SIGTERM);
+  nodes[1]->stop(SIGKILL);
+  ASSERT_TRUE(eventually([&] {
+    const auto r = broker.retained("gonio/+/state");
+    return r.count("gonio/gcms-a/state") && r.at("gonio/gcms-a/state") == R"({"state":"offline"})" &&
+           r.count("gonio/gcms-b/state") && r.at("gonio/gcms-b/state") == R"({"state":"offline"})";
+  }, 30s)) << broker.retained("gonio/+/state").size();
+}
+
+// A re-ship resends a scan without a single point twice; without a reachable server the
+// backlog ages and raises the warning.
+TEST(Archive, ReshipIsIdempotentAndAStaleBacklogRaisesAWarning) {
+  if (!servers_installed()) GTEST_SKIP() << "PostgreSQL 15 not installed";
+  TempDir dir;
+  Postgres pg(dir.path / "pg");
+  MockOptions o;
+  o.tcp = o.http = false;
+  o.extra = "[archive]\npostgres = \"" + pg.conninfo() +
+            "\"\ninstrument = \"solo\"\nretry_max_s = 0.2\nmax_backlog_age_s = 1\n";
+  Goniod g(dir.path / "solo", mock_config(o));
+  auto c = g.unix_conn();
+  const auto id = submit(c, "tile", kTrueSample, json{{"grids", {"in=45;out=-30:30:5"}}});  // 13 points
+  ASSERT_EQ(wait_state(c, id, {"completed"})["state"], "completed");
+  ASSERT_TRUE(eventually([&] { return c.call("archive.status")["backlog"] == 0; }, 30s))
+      << c.call("archive.status").dump() << g.log_text();
+  EXPECT_EQ(pg.query("SELECT count(*) FROM points WHERE instrument = 'solo'"), "13\n");
+
+  pg.stop();
+  const auto r = c.call("archive.reship", json{{"scan", id}});
+  EXPECT_EQ(r["queued"], 15);  // the sample, the scan and 13 points
+  ASSERT_TRUE(eventually([&] {
+    for (const auto& a : c.call("alert.list", json{{"acknowledged", false}}))
+      if (a["kind"] == "archive_backlog") return true;
+    return false;
+  }, 20s)) << c.call("archive.status").dump();
+  pg.start();
+  ASSERT_TRUE(eventually([&] { return c.call("archive.status")["backlog"] == 0; }, 30s))
+      << c.call("archive.status").dump();
+  EXPECT_EQ(pg.query("SELECT count(*), count(DISTINCT idx) FROM points WHERE instrument = 'solo'"), "13|13\n");
+  EXPECT_EQ(pg.query("SELECT count(*) FROM alerts WHERE instrument = 'solo' AND kind = 'archive_backlog'"), "1\n");
+}
+
+}  // namespace
+}  // namespace gonio::test
