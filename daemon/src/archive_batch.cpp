@@ -6,7 +6,6 @@
 
 #include "gonio/daemon/archive.hpp"
 #include "gonio/proto/error.hpp"
-#include "gonio/proto/point.hpp"
 
 namespace gonio::daemon {
 
@@ -21,7 +20,6 @@ constexpr std::size_t kMaxParams = 60000;
 std::string num(double v) { return fmt::format("{}", v); }
 std::string num(std::int64_t v) { return std::to_string(v); }
 std::string flag(bool b) { return b ? "t" : "f"; }
-Param opt(const std::optional<double>& v) { return v ? Param(num(*v)) : std::nullopt; }
 Param opt(const std::optional<std::int64_t>& v) { return v ? Param(num(*v)) : std::nullopt; }
 Param opt(const std::optional<std::string>& v) { return v; }
 
@@ -67,6 +65,50 @@ void append_text_element(std::string& out, const std::string& s) {
     out += c;
   }
   out += '"';
+}
+
+// A JSON array of numbers as a PostgreSQL array literal; null stays NULL.
+Param json_float_array(const json& a) {
+  if (a.is_null()) return std::nullopt;
+  std::string out = "{";
+  for (const auto& v : a) {
+    if (out.size() > 1) out += ',';
+    fmt::format_to(std::back_inserter(out), "{}", v.get<double>());
+  }
+  out += '}';
+  return out;
+}
+
+Param json_opt_number(const json& v) {
+  if (v.is_null()) return std::nullopt;
+  return num(v.get<double>());
+}
+
+// The 22 columns of a points row, read straight from the point's stored JSON (what
+// PointRecord's to_json wrote; the store validated it then): no PointRecord and no second
+// validation, which made up most of a batch's client time.
+void append_point(std::vector<Param>& p, const std::string& instrument, const json& pt) {
+  const auto& planned = pt.at("planned");
+  const auto& measured = pt.at("measured");
+  const auto& predicted = pt.at("predicted");
+  std::string flags = "{";
+  for (const auto& f : pt.at("flags")) {
+    if (flags.size() > 1) flags += ',';
+    append_text_element(flags, f.get<std::string>());
+  }
+  flags += '}';
+  p.insert(p.end(),
+           {instrument, num(pt.at("scan_id").get<std::int64_t>()), num(pt.at("index").get<std::int64_t>()),
+            num(pt.at("geometry_index").get<std::int64_t>()), num(pt.at("repeat").get<std::int64_t>()),
+            num(planned.at("theta_i").get<double>()), num(planned.at("phi_i").get<double>()),
+            num(planned.at("theta_r").get<double>()), num(planned.at("phi_r").get<double>()),
+            pt.at("actual").dump(), pt.at("started_at").get<std::string>(),
+            pt.at("finished_at").get<std::string>(), json_float_array(measured.at("wavelengths_nm")),
+            json_float_array(measured.at("values")), json_float_array(measured.at("std_uncertainty")),
+            predicted.is_null() ? std::nullopt : json_float_array(predicted.at("values")),
+            predicted.is_null() ? std::nullopt : json_float_array(predicted.at("std_uncertainty")),
+            pt.at("twin_version").get<std::string>(), json_opt_number(pt.at("z_max")),
+            json_opt_number(pt.at("delta_e00")), flag(pt.at("diverged").get<bool>()), std::move(flags)});
 }
 
 }  // namespace
@@ -173,24 +215,12 @@ std::vector<SqlStatement> build_archive_batch(const std::string& instrument,
       spdlog::error("archive: point {} of scan {} is in the outbox but not in the store", r.idx, r.ref);
       continue;
     }
-    PointRecord pt;
     try {
-      pt = json::parse(r.point_json).get<PointRecord>();
+      append_point(p, instrument, json::parse(r.point_json));
     } catch (const std::exception& e) {
       throw Error(Errc::internal, fmt::format("archive: point {} of scan {} is unreadable: {}",
                                               r.idx, r.ref, e.what()));
     }
-    const json actual = pt.actual;
-    p.insert(p.end(),
-             {instrument, num(pt.scan_id), num(pt.index), num(pt.geometry_index),
-              num(std::int64_t{pt.repeat}), num(pt.planned.theta_i), num(pt.planned.phi_i),
-              num(pt.planned.theta_r), num(pt.planned.phi_r), actual.dump(), pt.started_at,
-              pt.finished_at, pg_float_array(pt.measured.wavelengths.values()),
-              pg_float_array(pt.measured.values), pg_float_array(pt.measured.std_uncertainty),
-              pt.predicted ? Param(pg_float_array(pt.predicted->values)) : std::nullopt,
-              pt.predicted ? Param(pg_float_array(pt.predicted->std_uncertainty)) : std::nullopt,
-              pt.twin_version, opt(pt.z_max), opt(pt.delta_e00), flag(pt.diverged),
-              pg_text_array(pt.flags)});
   }
   if (!p.empty())
     emit(out, "INSERT INTO points (instrument, scan_id, idx, geometry_index, repeat, theta_i, "
