@@ -24,6 +24,10 @@ struct ArchiveShipper::Pg {
   [[noreturn]] void fail(std::string_view what) const {
     std::string msg = conn ? PQerrorMessage(conn) : "no connection";
     while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
+    // libpq's hints come on lines of their own; status and logs want one line.
+    for (std::size_t at; (at = msg.find("\n\t")) != std::string::npos;) msg.replace(at, 2, "; ");
+    for (char& c : msg)
+      if (c == '\n' || c == '\t') c = ' ';
     throw Error(Errc::disconnected, fmt::format("archive: {}: {}", what, msg));
   }
   // Runs `sql` with text parameters; throws with the server's message on failure.
