@@ -109,7 +109,7 @@ ctl() { "$root$bindir/gonioctl" --state-dir "$state" --json "$@"; }
 state=$tmp/state
 start "$root$bindir/goniod" "$state" 1
 ctl sample create paint --bsdf 'lambert:albedo=0.5' >/dev/null || fail "sample create failed"
-ctl scan submit --sample paint --grid 'in=30;out=-60:60:5' --wavelengths 400:700:100 >/dev/null ||
+ctl scan submit --sample paint --grid 'in=30;out=-15:57:3' --wavelengths 400:700:100 >/dev/null ||
   fail "scan submit failed"
 done_before=0
 for _ in $(seq 600); do
