@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <thread>
 
@@ -290,6 +291,19 @@ std::string json_to_toml(const json& doc) {
   return text;
 }
 
+namespace {
+
+// The effective configuration is printed (goniod --check-config) and may be pasted into a
+// ticket: secrets in a libpq connection string, keyword form (password=...) or URI form
+// (postgresql://user:secret@host/db), are shown as ***.
+std::string redact_conninfo(const std::string& conninfo) {
+  static const std::regex keyword(R"((password\s*=\s*)('(\\.|[^'])*'|\S+))", std::regex::icase);
+  static const std::regex uri(R"(^(postgres(ql)?://[^:@/]*:)[^@/]*@)", std::regex::icase);
+  return std::regex_replace(std::regex_replace(conninfo, keyword, "$1***"), uri, "$1***@");
+}
+
+}  // namespace
+
 json Config::to_json() const {
   json listen_uris = json::array();
   for (const auto& u : listen) listen_uris.push_back(u.to_string());
@@ -346,7 +360,7 @@ json Config::to_json() const {
   doc["mqtt"] = {{"url", mqtt.url},
                  {"instrument", mqtt.instrument},
                  {"username", mqtt.username},
-                 {"password", mqtt.password},
+                 {"password", mqtt.password.empty() ? "" : "***"},
                  {"qos", mqtt.qos},
                  {"topic_prefix", mqtt.topic_prefix},
                  {"ca_file", mqtt.ca_file},
@@ -354,7 +368,7 @@ json Config::to_json() const {
                  {"key_file", mqtt.key_file},
                  {"queue", mqtt.queue},
                  {"keepalive_s", mqtt.keepalive_s}};
-  doc["archive"] = {{"postgres", archive.postgres},
+  doc["archive"] = {{"postgres", redact_conninfo(archive.postgres)},
                     {"instrument", archive.instrument},
                     {"batch", archive.batch},
                     {"retry_max_s", in_seconds(archive.retry_max)},

@@ -348,6 +348,24 @@ max_backlog_age_s = 3600
   EXPECT_EQ(back.archive.max_backlog_age, c.archive.max_backlog_age);
 }
 
+TEST(ArchiveConfig, TheEffectiveConfigurationShowsNoSecrets) {
+  const auto c = Config::parse(R"(
+[mqtt]
+url = "mqtt://broker.lab:1883"
+username = "gonio"
+password = "mqtt-secret"
+
+[archive]
+postgres = "host=db.lab password='pg secret' dbname=gonio"
+)");
+  const auto shown = c.to_json().dump();
+  EXPECT_EQ(shown.find("mqtt-secret"), std::string::npos) << shown;
+  EXPECT_EQ(shown.find("pg secret"), std::string::npos) << shown;
+  EXPECT_EQ(c.to_json()["archive"]["postgres"], "host=db.lab password=*** dbname=gonio");
+  const auto uri = Config::parse("[archive]\npostgres = \"postgresql://gonio:s3cret@db.lab/gonio\"\n");
+  EXPECT_EQ(uri.to_json()["archive"]["postgres"], "postgresql://gonio:***@db.lab/gonio");
+}
+
 TEST(ArchiveConfig, BadValuesNameTheKeyAndTheAllowedRange) {
   expect_config_error("[mqtt]\nurl = \"http://x:1\"\n", "mqtt.url", "mqtt://HOST:PORT");
   expect_config_error("[mqtt]\nurl = \"mqtt://x:0\"\n", "mqtt.url", "1..65535");
