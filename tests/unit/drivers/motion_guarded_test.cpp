@@ -125,7 +125,9 @@ TEST(MotionLimits, TableGivesEveryAxisItsLimitsAndTheSeparation) {
 }
 
 TEST(GuardedMotion, RejectedMovesNeverReachTheController) {
-  auto [fake, motion] = make(MotionLimits{});
+  auto rig = make(MotionLimits{});
+  auto* fake = rig.fake;
+  auto& motion = rig.motion;
   const auto e = error_of([&] { motion->move(Axis::incidence, 86, 1s); });
   EXPECT_EQ(e.code(), Errc::limit_violation);
   EXPECT_EQ(e.field(), "incidence");
@@ -144,7 +146,9 @@ TEST(GuardedMotion, RejectedMovesNeverReachTheController) {
 TEST(GuardedMotion, ArmCollisionUsesThePositionsReadBackFromTheController) {
   MotionLimits l;
   l.min_separation = 10;
-  auto [fake, motion] = make(l);
+  auto rig = make(l);
+  auto* fake = rig.fake;
+  auto& motion = rig.motion;
   fake->pos[Axis::incidence] = 30;
   fake->pos[Axis::receive] = 30;
   // Target too close: receive at −25° leaves the arms 5° apart.
@@ -167,7 +171,9 @@ TEST(GuardedMotion, ArmCollisionUsesThePositionsReadBackFromTheController) {
 }
 
 TEST(GuardedMotion, NoSeparationOrNoSecondArmReadsNoPositions) {
-  auto [fake, motion] = make(MotionLimits{}, 0);
+  auto rig = make(MotionLimits{}, 0);
+  auto* fake = rig.fake;
+  auto& motion = rig.motion;
   motion->move(Axis::receive, -30, 1s);
   EXPECT_EQ(fake->position_reads, 0);
   MotionLimits l;
@@ -177,7 +183,9 @@ TEST(GuardedMotion, NoSeparationOrNoSecondArmReadsNoPositions) {
   EXPECT_EQ(one.fake->position_reads, 0);
   EXPECT_EQ(one.fake->calls, (std::vector<std::string>{"move incidence 40"}));
   // Rotation and tilt only get their soft limits checked.
-  auto [fake2, motion2] = make(l);
+  auto rig2 = make(l);
+  auto* fake2 = rig2.fake;
+  auto& motion2 = rig2.motion;
   motion2->move(Axis::rotation, 90, 1s);
   EXPECT_EQ(fake2->position_reads, 0);
 }
@@ -185,7 +193,9 @@ TEST(GuardedMotion, NoSeparationOrNoSecondArmReadsNoPositions) {
 TEST(GuardedMotion, EverythingElsePassesThrough) {
   MotionLimits l;
   l.min_separation = 10;
-  auto [fake, motion] = make(l);
+  auto rig = make(l);
+  auto* fake = rig.fake;
+  auto& motion = rig.motion;
   fake->pos[Axis::incidence] = 120;  // outside the limits: reading and homing still work
   EXPECT_EQ(motion->axes(), (std::vector<Axis>{Axis::incidence, Axis::receive, Axis::rotation}));
   EXPECT_FALSE(motion->capabilities().homing);
@@ -205,7 +215,9 @@ TEST(GuardedMotion, EverythingElsePassesThrough) {
 TEST(GuardedMotion, HomingIsPathCheckedWhereTheControllerKnowsItsEnd) {
   MotionLimits l;
   l.min_separation = 10;
-  auto [fake, motion] = make(l);
+  auto rig = make(l);
+  auto* fake = rig.fake;
+  auto& motion = rig.motion;
   fake->pos[Axis::incidence] = 40;
   fake->pos[Axis::receive] = 20;
   // Homing the receive arm to −40° would sweep it through the source arm (at 40°).
