@@ -24,10 +24,12 @@ class LivePlots {
   }
 }
 
+const lab1 = (v) => (Math.abs(v) < 0.05 ? 0 : v).toFixed(1);
+
 function Swatch({ label, c }) {
   return html`<figure class="swatch">
     <div class="chip" style=${{ background: c.hex }} title=${c.hex}></div>
-    <figcaption>${label}<br />L* ${fmt(c.lab[0], 3)} a* ${fmt(c.lab[1], 3)} b* ${fmt(c.lab[2], 3)}${c.clipped ? html`<br /><small>outside sRGB</small>` : ''}</figcaption>
+    <figcaption>${label} ${c.hex}<br />L* ${lab1(c.lab[0])} a* ${lab1(c.lab[1])} b* ${lab1(c.lab[2])}${c.clipped ? html`<br /><small>outside sRGB</small>` : ''}</figcaption>
   </figure>`;
 }
 
@@ -108,14 +110,14 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify }) {
     store.current.log = log;
     const width = Math.max(320, hostEl.current.clientWidth || 640);
     const beta = betaPlot(betaEl.current, curve, { log, width, height: 300, onPick: (i) => setPicked(store.current.points.get(i) || null) });
-    const lane = lanePlot(laneEl.current, curve, { zThreshold: thresholds && thresholds.z_threshold, dEThreshold: thresholds && thresholds.delta_e_threshold, width, height: 140 });
+    const lane = lanePlot(laneEl.current, curve, { zThreshold: thresholds && thresholds.z_threshold, dEThreshold: thresholds && thresholds.delta_e_threshold, width, height: 170 });
     live.current.beta = beta;
     live.current.lane = lane;
     hostEl.current.dataset.points = String(curve.length);
     const ro = typeof ResizeObserver !== 'undefined' ? new ResizeObserver(() => {
       const w = Math.max(320, hostEl.current.clientWidth);
       beta.setSize({ width: w, height: 300 });
-      lane.setSize({ width: w, height: 140 });
+      lane.setSize({ width: w, height: 170 });
     }) : null;
     if (ro) ro.observe(hostEl.current);
     return () => { if (ro) ro.disconnect(); beta.destroy(); lane.destroy(); live.current.beta = live.current.lane = null; };
