@@ -168,6 +168,17 @@ export async function exportFile(call, scan, format) {
   return { filename: r.filename, mediaType: r.media_type, content: parts.join('') };
 }
 
+// fn(latest value) at most once per `ms`: notifications that arrive with every point
+// (progress, instrument state) re-render the page at a readable rate, not at the point rate.
+export function coalesce(fn, ms, timers = globalThis) {
+  let latest, timer = null;
+  return (v) => {
+    latest = v;
+    if (timer !== null) return;
+    timer = timers.setTimeout(() => { timer = null; fn(latest); }, ms);
+  };
+}
+
 export function fmt(v, digits = 4) {
   if (v === null || v === undefined || Number.isNaN(v)) return '–';
   if (typeof v !== 'number') return String(v);

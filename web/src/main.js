@@ -7,7 +7,7 @@ import 'uplot/dist/uPlot.min.css';
 import './style.css';
 import { html } from './ui.js';
 import { Rpc, wsUrl } from './rpc.js';
-import { mergeAlerts, unacknowledged, can } from './logic.js';
+import { mergeAlerts, unacknowledged, can, coalesce } from './logic.js';
 import { InstrumentPanel } from './instrument.js';
 import { QueuePanel, SubmitForm } from './queue.js';
 import { ScanPanel } from './scan.js';
@@ -83,6 +83,13 @@ function Dashboard({ token, onLogout, onRefused }) {
         setScanId((cur) => cur ?? (q.running ? q.running.id : null));
       } catch (e) { notify(e.message); }
     };
+    const progress = new Map(); // scan → its latest progress, applied together
+    const applyProgress = coalesce(() => {
+      const all = new Map(progress);
+      progress.clear();
+      setQueue((q) => (q && q.running && all.has(q.running.id) ? { ...q, running: { ...q.running, ...all.get(q.running.id), id: q.running.id } } : q));
+    }, 250);
+    const applyStatus = coalesce(setStatus, 250);
     const r = new Rpc({
       url: wsUrl(location), token, topics: ['progress', 'points', 'alerts', 'state'],
       onStatus: (s, detail) => {
@@ -94,9 +101,9 @@ function Dashboard({ token, onLogout, onRefused }) {
       onNotification: (method, params) => {
         bus.emit(method, params);
         if (method === 'alert') setAlerts((a) => mergeAlerts(a, [params]));
-        else if (method === 'instrument.state') setStatus(params);
+        else if (method === 'instrument.state') applyStatus(params);
         else if (method === 'scan.state') refreshQueue().catch(() => {});
-        else if (method === 'scan.progress') setQueue((q) => (q && q.running && q.running.id === params.scan ? { ...q, running: { ...q.running, ...params, id: params.scan } } : q));
+        else if (method === 'scan.progress') { progress.set(params.scan, params); applyProgress(); }
       },
     });
     rpc.current = r;

@@ -3,7 +3,7 @@
 // clicked point's spectra and colours, and the exports.
 import { useEffect, useMemo, useRef, useState } from 'preact/hooks';
 import { html, download } from './ui.js';
-import { Curve, channelOf, exportFile, fmt, incidences } from './logic.js';
+import { Curve, channelOf, coalesce, exportFile, fmt, incidences } from './logic.js';
 import { betaPlot, betaData, lanePlot, laneData, spectrumPlot } from './plot.js';
 import { colourOf } from './colour.js';
 import tables from 'virtual:colour-tables';
@@ -93,7 +93,8 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify }) {
         setVersion((v) => v + 1);
       } catch (e) { if (!gone) notify(`scan ${scanId}: ${e.message}`); }
     })();
-    const offState = bus.on('scan.progress', (p) => { if (p.scan === scanId) setScan((s) => (s ? { ...s, state: p.state, points_done: p.points_done, points_total: p.points_total, points_diverged: p.points_diverged } : s)); });
+    const progress = coalesce((p) => setScan((s) => (s ? { ...s, state: p.state, points_done: p.points_done, points_total: p.points_total, points_diverged: p.points_diverged } : s)), 250);
+    const offState = bus.on('scan.progress', (p) => { if (p.scan === scanId) progress(p); });
     return () => { gone = true; off(); offState(); };
   }, [scanId]);
 

@@ -2,7 +2,7 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import {
   backoffDelay, formFieldOf, describeError, submitParams, channelOf, insertionIndex, Curve,
-  incidences, mergeAlerts, unacknowledged, can, scanActions, armEnd, collisionWedge, exportFile, fmt,
+  incidences, mergeAlerts, coalesce, unacknowledged, can, scanActions, armEnd, collisionWedge, exportFile, fmt,
 } from '../../src/logic.js';
 
 test('back-off doubles from the base to the cap, jittered within [½, 1]', () => {
@@ -113,4 +113,18 @@ test('numbers', () => {
   assert.equal(fmt(1000), '1000');
   assert.equal(fmt(1.5e-5), '1.500e-5');
   assert.equal(fmt(null), '–');
+});
+
+test('coalesce: the latest value, at most once per period', () => {
+  const pending = [];
+  const timers = { setTimeout: (f) => pending.push(f) };
+  const seen = [];
+  const f = coalesce((v) => seen.push(v), 250, timers);
+  f(1); f(2); f(3);
+  assert.equal(pending.length, 1);
+  pending.shift()();
+  assert.deepEqual(seen, [3]);
+  f(4);
+  pending.shift()();
+  assert.deepEqual(seen, [3, 4]);
 });
