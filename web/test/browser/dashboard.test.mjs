@@ -146,6 +146,32 @@ describe('dashboard', () => {
     await shot('06-point-details');
   });
 
+  it('previews a sample\'s predicted curve, then creates it', async () => {
+    await page.click($('nav-samples'));
+    const form = $('sample-create');
+    await page.waitForSelector(form, { timeout: T });
+    await page.type(`${form} #f-name`, 'glossy');
+    await page.type(`${form} #f-bsdf`, 'lambert:albedo=0.5+coat:alpha=0.05,ior=1.5');
+    await page.click($('sample-preview'));
+    await page.waitForSelector(`${$('sample-preview-plot')} canvas`, { timeout: T });
+    await page.click(`${form} button[type=submit]`);
+    await page.waitForFunction((s) => [...document.querySelectorAll(`${s} td`)].some((td) => td.textContent === 'glossy'), { timeout: T }, $('samples'));
+    assert.equal((await g.call('sample.get', { sample: 'glossy' })).name, 'glossy');
+    await shot('07-samples');
+  });
+
+  it('predicts in the twin playground', async () => {
+    await page.click($('nav-twin'));
+    await page.waitForSelector(`${$('twin-form')} button[type=submit]`, { timeout: T });
+    await page.$eval(`${$('twin-form')} #f-grids`, (e) => { e.value = ''; });
+    await page.type(`${$('twin-form')} #f-grids`, 'in=45;out=-60:60:10');
+    await page.click(`${$('twin-form')} button[type=submit]`);
+    await page.waitForSelector(`${$('twin-plot')} canvas`, { timeout: T });
+    await shot('07-twin');
+    await page.click($('nav-run'));
+    await page.waitForSelector($('scan-plot'), { timeout: T });
+  });
+
   it('keeps working across a goniod restart', async () => {
     // A scan long enough to be running through the restart, shown in the plot.
     if (!(await g.call('queue.status')).running) {
