@@ -142,6 +142,8 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify }) {
       ${incs.length > 1 && html`<label>θi <select value=${thetaI} onChange=${(e) => setThetaI(Number(e.currentTarget.value))}>
         ${incs.map((t) => html`<option value=${t}>${t}°</option>`)}</select></label>`}
       <label><input type="checkbox" checked=${log} onChange=${(e) => setLog(e.currentTarget.checked)} data-testid="plot-log" /> log β</label>
+      <label>point <input class="point-index" type="number" min="0" value=${picked ? picked.index : ''} data-testid="point-index"
+        aria-label="show the point with this index" onChange=${(e) => setPicked(store.current.points.get(Number(e.currentTarget.value)) || null)} /></label>
       <span class="exports">Export:
         ${['csv', 'json', 'bsdf', 'ssdd'].map((f) => html` <button data-testid=${`export-${f}`} onClick=${() => exp(f)}>${f}</button>`)}</span>
     </div>
@@ -149,7 +151,7 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify }) {
       <div ref=${betaEl} class="plot"></div>
       <div ref=${laneEl} class="plot lane" data-testid="divergence-lane"></div>
     </div>
-    <p class="muted">Click a point for its spectra and colours. Thresholds: max |z| ${fmt(thresholds && thresholds.z_threshold, 3)}, ΔE00 ${fmt(thresholds && thresholds.delta_e_threshold, 3)}.</p>
+    <p class="muted">Click a point (or give its index) for its spectra and colours. Thresholds: max |z| ${fmt(thresholds && thresholds.z_threshold, 3)}, ΔE00 ${fmt(thresholds && thresholds.delta_e_threshold, 3)}.</p>
     ${picked && html`<${PointDetails} point=${picked} />`}
   </section>`;
 }
