@@ -46,6 +46,8 @@ function hline(value, scale, colour) {
 }
 
 // curve: logic.js Curve (its cols are the plot's columns, kept sorted by θr).
+// Point markers follow uPlot's density rule (shown while the points are a few pixels apart):
+// a marker per point would cost an arc each per frame on a 1,000-point scan.
 export function betaPlot(el, curve, { log, width, height, onPick }) {
   const measured = css('--measured', '#1565c0'), twin = css('--twin', '#e65100');
   const opts = {
@@ -54,7 +56,7 @@ export function betaPlot(el, curve, { log, width, height, onPick }) {
     axes: [{ label: 'θr (°)' }, { label: `β at ${curve.nm} nm`, size: 60 }],
     series: [
       { label: 'θr' },
-      { label: 'measured β ± u', stroke: measured, width: 1.5, points: { show: true, size: 5 } },
+      { label: 'measured β ± u', stroke: measured, width: 1.5, points: { size: 5 } },
       { label: 'twin β ± s.e.', stroke: twin, width: 1.5, dash: [5, 3], points: { show: false } },
     ],
     legend: { live: true },
@@ -86,8 +88,8 @@ export function lanePlot(el, curve, { zThreshold, dEThreshold, width, height }) 
     axes: [{ label: 'θr (°)' }, { label: 'max |z|, ΔE00', size: 60 }],
     series: [
       { label: 'θr' },
-      { label: 'max |z|', stroke: z, width: 1.5, points: { show: true, size: 4 } },
-      { label: 'ΔE00', stroke: de, width: 1.5, points: { show: true, size: 4 } },
+      { label: 'max |z|', stroke: z, width: 1.5, points: { size: 4 } },
+      { label: 'ΔE00', stroke: de, width: 1.5, points: { size: 4 } },
     ],
     hooks: { draw: [hline(zThreshold, 'y', z), hline(dEThreshold, 'y', de)] },
   }, laneData(curve), el);
