@@ -51,7 +51,6 @@ function Dashboard({ token, onLogout, onRefused }) {
   const [view, setView] = useState('run');
   const [status, setStatus] = useState(null);
   const [queue, setQueue] = useState(null);
-  const [held, setHeld] = useState([]);
   const [alerts, setAlerts] = useState([]);
   const [samples, setSamples] = useState([]);
   const [thresholds, setThresholds] = useState(null);
@@ -63,10 +62,8 @@ function Dashboard({ token, onLogout, onRefused }) {
   const notify = useCallback((msg) => { setToast(msg); setTimeout(() => setToast((t) => (t === msg ? null : t)), 6000); }, []);
 
   const refreshQueue = useCallback(async () => {
-    const [q, paused, interrupted] = await Promise.all([
-      call('queue.status'), call('scan.list', { state: 'paused' }), call('scan.list', { state: 'interrupted' })]);
+    const q = await call('queue.status'); // waiting: queued, paused and interrupted scans, in order
     setQueue(q);
-    setHeld([...interrupted, ...paused]);
     return q;
   }, []);
 
@@ -108,8 +105,15 @@ function Dashboard({ token, onLogout, onRefused }) {
     });
     rpc.current = r;
     r.start();
-    // Arm positions while a scan moves them: instrument.state is sent on state changes only.
-    timer = setInterval(() => { if (r.ready) call('instrument.status').then(setStatus, () => {}); }, 1000);
+    // Arm positions while a scan moves them (instrument.state is sent on state changes only),
+    // and the queue, which other clients change without a notification (a scan queued by
+    // gonioctl, a reorder).
+    let ticks = 0;
+    timer = setInterval(() => {
+      if (!r.ready) return;
+      call('instrument.status').then(setStatus, () => {});
+      if (++ticks % 2 === 0) refreshQueue().catch(() => {});
+    }, 1000);
     return () => { clearInterval(timer); r.stop(); };
   }, [token]);
 
@@ -131,7 +135,7 @@ function Dashboard({ token, onLogout, onRefused }) {
       ${view === 'run' && html`<div class="grid">
         <div class="col">
           <${InstrumentPanel} status=${status} role=${role} call=${call} notify=${notify} />
-          <${QueuePanel} queue=${queue} held=${held} role=${role} call=${call} notify=${notify} selected=${scanId} onSelect=${setScanId} />
+          <${QueuePanel} queue=${queue} role=${role} call=${call} notify=${notify} selected=${scanId} onSelect=${setScanId} />
           ${can(role, 'submit') && html`<section class="panel"><h2>Submit a scan</h2>
             <${SubmitForm} samples=${samples} call=${call} onSubmitted=${(s) => { setScanId(s.id); refreshQueue().catch(() => {}); }} /></section>`}
         </div>

@@ -1,4 +1,4 @@
-// The queue: running and waiting scans (and paused or interrupted ones) with their actions,
+// The queue: the running scan and the waiting ones (queued, paused, interrupted) with their actions,
 // and the submit form, whose API errors are shown at the field they name.
 import { useState } from 'preact/hooks';
 import { html, Field, fieldErrors } from './ui.js';
@@ -77,16 +77,15 @@ function ScanRow({ scan, index, last, role, call, notify, onSelect, selected }) 
   </li>`;
 }
 
-export function QueuePanel({ queue, held, role, call, notify, selected, onSelect }) {
+export function QueuePanel({ queue, role, call, notify, selected, onSelect }) {
   const waiting = (queue && queue.waiting) || [];
   const running = queue && queue.running ? [queue.running] : [];
   return html`<section class="panel queue-panel" aria-labelledby="h-queue">
     <h2 id="h-queue">Queue</h2>
     <ul class="queue" data-testid="queue">
       ${running.map((s) => html`<${ScanRow} key=${s.id} scan=${s} index=${0} last=${true} role=${role} call=${call} notify=${notify} onSelect=${onSelect} selected=${selected === s.id} />`)}
-      ${held.map((s) => html`<${ScanRow} key=${s.id} scan=${s} index=${0} last=${true} role=${role} call=${call} notify=${notify} onSelect=${onSelect} selected=${selected === s.id} />`)}
       ${waiting.map((s, i) => html`<${ScanRow} key=${s.id} scan=${s} index=${i} last=${i === waiting.length - 1} role=${role} call=${call} notify=${notify} onSelect=${onSelect} selected=${selected === s.id} />`)}
-      ${running.length + held.length + waiting.length === 0 && html`<li class="muted">nothing running or waiting</li>`}
+      ${running.length + waiting.length === 0 && html`<li class="muted">nothing running or waiting</li>`}
     </ul>
   </section>`;
 }
