@@ -29,6 +29,12 @@ describe('dashboard', () => {
 
   const $ = (id) => `[data-testid="${id}"]`;
   const shot = (name) => page.screenshot({ path: join(artifacts, `${name}.png`), fullPage: true });
+  // Replaces a field's text through input events, as a user would: a value set behind the
+  // UI's back is put back by its next render.
+  const fill = async (sel, text) => {
+    await page.$eval(sel, (e) => { e.value = ''; e.dispatchEvent(new Event('input', { bubbles: true })); });
+    await page.type(sel, text);
+  };
   const attr = (sel, name) => page.$eval(sel, (e, n) => e.getAttribute(n), name);
   const points = () => page.$eval($('scan-plot'), (e) => Number(e.dataset.points || 0));
   const waitPoints = (n) => page.waitForFunction((s, k) => Number(document.querySelector(s)?.dataset.points || 0) >= k, { timeout: T }, $('scan-plot'), n);
@@ -82,8 +88,7 @@ describe('dashboard', () => {
   it('shows the API error of a bad grid at the field', async () => {
     await page.waitForSelector(`${$('scan-submit')} select[name=sample] option`, { timeout: T });
     const grid = `${$('scan-submit')} textarea[name=grids]`;
-    await page.$eval(grid, (e) => { e.value = ''; });
-    await page.type(grid, 'in=45;out=-30:80:bad');
+    await fill(grid, 'in=45;out=-30:80:bad');
     await page.click($('scan-submit-button'));
     await page.waitForSelector($('field-error-grids'), { timeout: T });
     const text = await page.$eval($('field-error-grids'), (e) => e.textContent);
@@ -110,10 +115,8 @@ describe('dashboard', () => {
   it('predicts in the twin playground', async () => {
     await page.click($('nav-twin'));
     await page.waitForSelector(`${$('twin-form')} button[type=submit]`, { timeout: T });
-    await page.$eval(`${$('twin-form')} #f-grids`, (e) => { e.value = ''; });
-    await page.type(`${$('twin-form')} #f-grids`, 'in=45;out=-60:60:20');
-    await page.$eval(`${$('twin-form')} #f-wavelengths`, (e) => { e.value = ''; });
-    await page.type(`${$('twin-form')} #f-wavelengths`, '500:600:50');
+    await fill(`${$('twin-form')} #f-grids`, 'in=45;out=-60:60:20');
+    await fill(`${$('twin-form')} #f-wavelengths`, '500:600:50');
     await page.click(`${$('twin-form')} button[type=submit]`);
     await page.waitForSelector(`${$('twin-plot')} canvas, ${$('twin-form')} .form-error, ${$('twin-form')} .field-error`, { timeout: T });
     assert.equal(await page.$eval($('twin-form'), (f) => f.querySelector('.form-error, .field-error')?.textContent ?? null), null);
@@ -124,12 +127,10 @@ describe('dashboard', () => {
 
   it('submits a scan from the form and plots its points as they arrive', async () => {
     const grid = `${$('scan-submit')} textarea[name=grids]`;
-    await page.$eval(grid, (e) => { e.value = ''; });
-    await page.type(grid, 'in=45;out=-30:80:1');
+    await fill(grid, 'in=45;out=-30:80:1');
     await page.click($('scan-submit-button'));
-    await page.waitForSelector(`${$('queue')} ${$('queue-item-1')}`, { timeout: T });
-    assert.equal(await page.$($('submit-error')), null);
-    assert.equal(await page.$($('field-error-grids')), null);
+    await page.waitForSelector(`${$('queue')} ${$('queue-item-1')}, ${$('scan-submit')} .form-error, ${$('scan-submit')} .field-error`, { timeout: T });
+    assert.equal(await page.$eval($('scan-submit'), (f) => f.querySelector('.form-error, .field-error')?.textContent ?? null), null);
     await page.waitForSelector(`${$('queue')} [data-state="running"]`, { timeout: T });
     await waitPoints(3);
     const first = await points();
