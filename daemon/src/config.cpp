@@ -304,6 +304,8 @@ std::string redact_conninfo(const std::string& conninfo) {
 
 }  // namespace
 
+std::string default_web_root() { return GONIO_WEB_ROOT; }
+
 json Config::to_json() const {
   json listen_uris = json::array();
   for (const auto& u : listen) listen_uris.push_back(u.to_string());
@@ -317,6 +319,7 @@ json Config::to_json() const {
                    {"idle_timeout_s", in_seconds(idle_timeout)},
                    {"max_queue", max_queue},
                    {"max_connections", max_connections},
+                   {"web_root", web_root},
                    {"log_level", log_level}};
   if (!tokens.empty()) {
     json list = json::array();
@@ -434,6 +437,9 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
         c.allowed_origins.push_back(std::move(origin));
       }
     }
+    c.web_root = r.optional<std::string>("web_root", c.web_root);
+    if (!c.web_root.empty() && c.web_root.front() != '/')
+      throw Error::invalid("server.web_root", fmt::format("'{}' must be an absolute path (or empty: no dashboard)", c.web_root));
     c.log_level = r.optional<std::string>("log_level", c.log_level);
     if (c.log_level != "trace" && c.log_level != "debug" && c.log_level != "info" &&
         c.log_level != "warn" && c.log_level != "error")

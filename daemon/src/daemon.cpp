@@ -293,7 +293,13 @@ int run_daemon(const DaemonOptions& o) {
     register_methods(dispatcher, services);
 
     // ---- listeners: the state dir's socket always, then the configured ones.
-    const net::Context ctx{dispatcher, hub, auth, net::Limits::from(config), net_stats};
+    auto web = std::make_shared<const WebRoot>(
+        config.web_root.empty() ? WebRoot{} : WebRoot::load(config.web_root));
+    if (web->empty())
+      spdlog::info("no dashboard: {} holds no files", config.web_root.empty() ? "server.web_root" : config.web_root);
+    else
+      spdlog::info("dashboard: {} files from {}", web->size(), config.web_root);
+    const net::Context ctx{dispatcher, hub, auth, net::Limits::from(config), net_stats, web};
     auto uris = config.listen;
     const auto default_sock = (state / "goniod.sock").string();
     if (std::none_of(uris.begin(), uris.end(), [&](const ListenUri& u) {

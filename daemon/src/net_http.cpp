@@ -1,5 +1,7 @@
 // HTTP POST /rpc and WebSocket /ws via Boost.Beast (see net.hpp).
+#include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <deque>
 #include <mutex>
 
@@ -95,6 +97,22 @@ bool is_json_media_type(std::string_view content_type) {
   while (!t.empty() && t.back() == ' ') t.pop_back();
   while (!t.empty() && t.front() == ' ') t.erase(0, 1);
   return t == "application/json";
+}
+
+// The dashboard's Content-Security-Policy: nothing but its own files, no inline script or
+// style, and connections only back to this listener (the WebSocket by the Host the browser
+// used; a Host that is not a plain host[:port] gets 'self' alone).
+std::string content_security_policy(std::string_view host) {
+  const bool plain = !host.empty() && host.size() <= 255 &&
+                     std::all_of(host.begin(), host.end(), [](char c) {
+                       return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' ||
+                              c == ':' || c == '[' || c == ']';
+                     });
+  const auto ws = plain ? fmt::format(" ws://{0} wss://{0}", host) : std::string{};
+  return fmt::format("default-src 'self'; script-src 'self'; style-src 'self'; img-src 'self' data: blob:; "
+                     "connect-src 'self'{}; object-src 'none'; base-uri 'none'; form-action 'self'; "
+                     "frame-ancestors 'none'",
+                     ws);
 }
 
 // A request over HTTP POST: no notifications can reach it.
@@ -421,6 +439,8 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
       ws->start(std::move(req));
       return;
     }
+    if (target != "/rpc" && st_->ctx.web && (req.method() == http::verb::get))
+      if (const auto* file = st_->ctx.web->find(target)) return send_file(*file, host, req.keep_alive(), req.version());
     if (target != "/rpc")
       return send(http::status::not_found,
                   error_body(rpc::code::method_not_found,
@@ -467,6 +487,23 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
     });
   }
 
+  // One of the dashboard's files; the body is copied into the response, and counts against
+  // the shared output budget like any answer.
+  void send_file(const WebFile& file, std::string_view host, bool keep_alive, unsigned version) {
+    auto res = std::make_shared<http::response<http::string_body>>(http::status::ok, version);
+    res->set(http::field::server, "goniod");
+    res->set(http::field::content_type, file.content_type);
+    res->set(http::field::cache_control, file.cache_control);
+    res->set("Content-Security-Policy", content_security_policy(host));
+    res->set("X-Content-Type-Options", "nosniff");
+    res->set("Referrer-Policy", "no-referrer");
+    res->set("X-Frame-Options", "DENY");
+    res->keep_alive(keep_alive);
+    res->body() = file.body;
+    res->prepare_payload();
+    write(std::move(res));
+  }
+
   void send(http::status status, std::string body, bool keep_alive, unsigned version,
             bool challenge = false, const char* allow = nullptr) {
     auto res = std::make_shared<http::response<http::string_body>>(status, version);
@@ -486,6 +523,10 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
     res->keep_alive(keep_alive);
     res->body() = std::move(body);
     res->prepare_payload();
+    write(std::move(res));
+  }
+
+  void write(std::shared_ptr<http::response<http::string_body>> res) {
     const auto bytes = res->body().size();
     st_->ctx.stats.buffered_bytes += bytes;
     stream_.expires_after(limits_.write_timeout);

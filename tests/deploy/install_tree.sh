@@ -24,6 +24,10 @@ expected=(
   "$docdir/examples/goniod-hardware.toml" "$docdir/examples/goniod-mock.toml"
   "$docdir/copyright" "$docdir/changelog.gz"
 )
+# The dashboard as the build made it (hashed names), when it was built.
+if [[ -n ${web_dist:-} ]]; then
+  while IFS= read -r f; do expected+=("$datadir/gonio/web/$f"); done < <(cd "$web_dist" && find . -type f | sed 's|^\./||')
+fi
 # The whole tree, both ways: nothing missing, nothing else (gonio-devsim and gonio-load are
 # development tools: cmake --install --component tools).
 diff_out=$(diff <(printf '%s\n' "${expected[@]}" | sort) \
@@ -42,6 +46,9 @@ same() {  # same INSTALLED SOURCE
   cmp -s "$r$1" "$source/$2" || fail "$1 is not a copy of $2"
 }
 same "$rulesdir/70-gonio.rules" systemd/70-gonio.rules
+if [[ -n ${web_dist:-} ]]; then
+  cmp -s "$r$datadir/gonio/web/index.html" "$web_dist/index.html" || fail "the installed dashboard is not the built one"
+fi
 same "$sysusersdir/gonio.conf" systemd/sysusers.d/gonio.conf
 same "$modulesloaddir/gonio.conf" systemd/modules-load.d/gonio.conf
 same "$confdir/goniod.toml" daemon/examples/goniod-hardware.toml

@@ -114,6 +114,14 @@ TEST(Config, ReconnectBackOffIsBoundedAndOrdered) {
             "instrument.reconnect_max_s");
 }
 
+TEST(Config, WebRootIsTheInstalledDashboardAnAbsolutePathOrNone) {
+  EXPECT_EQ(Config{}.web_root, default_web_root());
+  EXPECT_TRUE(default_web_root().ends_with("/gonio/web")) << default_web_root();
+  EXPECT_EQ(Config::parse("[server]\nweb_root = \"/srv/gonio-web\"\n", "t.toml").web_root, "/srv/gonio-web");
+  EXPECT_EQ(Config::parse("[server]\nweb_root = \"\"\n", "t.toml").web_root, "");
+  EXPECT_EQ(field_of("[server]\nweb_root = \"web/dist\"\n"), "server.web_root");
+}
+
 TEST(Config, RemoteListenNeedsOptIn) {
   const auto c = Config::parse("[server]\nallow_remote = true\nlisten = [\"tcp://0.0.0.0:7700\"]\n");
   EXPECT_FALSE(c.listen[0].loopback());
@@ -211,7 +219,7 @@ reference_drift = 0.05
   // Every key of every table, defaults included.
   const auto doc = Config{}.to_json();
   for (const char* key : {"listen", "allow_remote", "io_threads", "rpc_threads", "max_message_bytes",
-                          "read_timeout_s", "idle_timeout_s", "max_queue", "max_connections", "log_level"})
+                          "read_timeout_s", "idle_timeout_s", "max_queue", "max_connections", "web_root", "log_level"})
     EXPECT_TRUE(doc["server"].contains(key)) << key;
   EXPECT_EQ(doc["instrument"]["limits"]["incidence"], nlohmann::json::array({0.0, 85.0}));
   EXPECT_EQ(doc["webhook"]["min_severity"], "warning");

@@ -78,6 +78,9 @@ struct TokenEntry {
 inline constexpr const char* kDemoSampleBsdf =
     "lambert:albedo=400:0.06,500:0.12,600:0.45,700:0.55+coat:alpha=0.06,ior=1.5";
 
+// Where the package installs the dashboard (web/): <datadir>/gonio/web.
+std::string default_web_root();
+
 struct Config {
   // [server]
   std::vector<ListenUri> listen;  // empty: unix:<state-dir>/goniod.sock only
@@ -95,6 +98,8 @@ struct Config {
   std::size_t max_batch = 128;        // elements of one batch
   std::size_t max_response_bytes = 8u << 20;
   std::vector<std::string> allowed_origins;  // browser origins besides the listener's own host
+  // The dashboard's files, served on the HTTP listeners (empty: no dashboard).
+  std::string web_root = default_web_root();
   std::size_t max_connections = 512;
   std::size_t rpc_threads = 2;        // workers for blocking methods
   std::string log_level = "info";

@@ -9,7 +9,8 @@
 //                      auth.login with a valid token.
 //   http://HOST:PORT   POST /rpc (one message per request, Authorization: Bearer TOKEN) and
 //                      GET /ws (WebSocket, text frames, one message per frame; the bearer
-//                      header at the upgrade or auth.login as the first call).
+//                      header at the upgrade or auth.login as the first call); GET and HEAD
+//                      of anything else: the dashboard's files (web_root.hpp).
 //
 // Every connection: a size limit per message (the connection is told -32600 and closed),
 // a read timeout for a started message (stalled peers are dropped), an optional idle
@@ -36,6 +37,7 @@
 #include "gonio/daemon/config.hpp"
 #include "gonio/daemon/hub.hpp"
 #include "gonio/daemon/rpc.hpp"
+#include "gonio/daemon/web_root.hpp"
 
 namespace boost::asio {
 class io_context;
@@ -83,6 +85,7 @@ struct Context {
   const Auth& auth;
   Limits limits;
   NetStats& stats;
+  std::shared_ptr<const WebRoot> web;  // the dashboard, served by GET on HTTP listeners
 };
 
 class Listener {

@@ -1,0 +1,137 @@
+// uPlot wrappers: β against θr with error bars (drawn in a hook: uPlot has none), the
+// divergence lane with its thresholds, and spectra against λ.
+import uPlot from 'uplot';
+
+const css = (name, fallback) => getComputedStyle(document.documentElement).getPropertyValue(name).trim() || fallback;
+
+// Vertical bars ± err[i] around y[i] for series `si`, in the series' colour.
+function errorBars(si, errCol) {
+  return (u) => {
+    const xs = u.data[0], ys = u.data[si], es = errCol();
+    if (!es || !u.series[si].show) return;
+    const ctx = u.ctx;
+    ctx.save();
+    ctx.strokeStyle = u.series[si].stroke();
+    ctx.lineWidth = 1;
+    ctx.beginPath();
+    const [i0, i1] = [u.series[0].idxs ? u.series[0].idxs[0] : 0, u.series[0].idxs ? u.series[0].idxs[1] : xs.length - 1];
+    for (let i = i0; i <= i1; i++) {
+      const y = ys[i], e = es[i];
+      if (y == null || e == null || !(e > 0)) continue;
+      const x = Math.round(u.valToPos(xs[i], 'x', true));
+      let lo = y - e;
+      if (u.scales.y.distr === 3 && lo <= 0) lo = y / 10;
+      ctx.moveTo(x, u.valToPos(y + e, 'y', true));
+      ctx.lineTo(x, u.valToPos(lo, 'y', true));
+    }
+    ctx.stroke();
+    ctx.restore();
+  };
+}
+
+function hline(value, scale, colour) {
+  return (u) => {
+    if (value == null) return;
+    const y = Math.round(u.valToPos(value, scale, true));
+    const ctx = u.ctx;
+    ctx.save();
+    ctx.strokeStyle = colour;
+    ctx.setLineDash([6, 4]);
+    ctx.beginPath();
+    ctx.moveTo(u.bbox.left, y);
+    ctx.lineTo(u.bbox.left + u.bbox.width, y);
+    ctx.stroke();
+    ctx.restore();
+  };
+}
+
+// curve: logic.js Curve (its cols are the plot's columns, kept sorted by θr).
+// Point markers follow uPlot's density rule (shown while the points are a few pixels apart):
+// a marker per point would cost an arc each per frame on a 1,000-point scan.
+export function betaPlot(el, curve, { log, width, height, onPick }) {
+  const measured = css('--measured', '#1565c0'), twin = css('--twin', '#e65100');
+  const opts = {
+    width, height,
+    scales: { x: { time: false }, y: log ? { distr: 3 } : { auto: true } },
+    axes: [{ label: 'θr (°)' }, { label: `β at ${curve.nm} nm`, size: 60 }],
+    series: [
+      { label: 'θr' },
+      { label: 'measured β ± u', stroke: measured, width: 1.5, points: { size: 5 } },
+      { label: 'twin β ± s.e.', stroke: twin, width: 1.5, dash: [5, 3], points: { show: false } },
+    ],
+    legend: { live: true },
+    hooks: {
+      draw: [errorBars(1, () => curve.cols[2]), errorBars(2, () => curve.cols[4])],
+      ready: [(u) => {
+        u.over.addEventListener('click', () => {
+          const i = u.cursor.idx;
+          if (i != null && onPick) onPick(curve.cols[7][i]);
+        });
+      }],
+    },
+  };
+  return new uPlot(opts, betaData(curve, log), el);
+}
+
+export function betaData(curve, log) {
+  const c = curve.cols;
+  if (!log) return [c[0], c[1], c[3]];
+  const pos = (v) => (v != null && v > 0 ? v : null);
+  return [c[0], c[1].map(pos), c[3].map(pos)];
+}
+
+export function lanePlot(el, curve, { zThreshold, dEThreshold, width, height }) {
+  const z = css('--z', '#6a1b9a'), de = css('--de', '#2e7d32');
+  return new uPlot({
+    width, height,
+    scales: { x: { time: false }, y: { auto: true, range: (u, lo, hi) => [0, Math.max(hi, (zThreshold || 0) * 1.2, (dEThreshold || 0) * 1.2, 1)] } },
+    axes: [{ label: 'θr (°)' }, { label: 'max |z|, ΔE00', size: 60 }],
+    series: [
+      { label: 'θr' },
+      { label: 'max |z|', stroke: z, width: 1.5, points: { size: 4 } },
+      { label: 'ΔE00', stroke: de, width: 1.5, points: { size: 4 } },
+    ],
+    hooks: { draw: [hline(zThreshold, 'y', z), hline(dEThreshold, 'y', de)] },
+  }, laneData(curve), el);
+}
+
+export function laneData(curve) {
+  return [curve.cols[0], curve.cols[5], curve.cols[6]];
+}
+
+// Measured and predicted spectra of one point.
+export function spectrumPlot(el, point, { width, height }) {
+  const m = point.measured, p = point.predicted;
+  const cols = { m: m.values, mu: m.std_uncertainty, p: p ? p.values : m.values.map(() => null), ps: p ? p.std_uncertainty : null };
+  return new uPlot({
+    width, height,
+    scales: { x: { time: false } },
+    axes: [{ label: 'λ (nm)' }, { label: 'β', size: 60 }],
+    series: [
+      { label: 'λ' },
+      { label: 'measured', stroke: css('--measured', '#1565c0'), width: 1.5 },
+      { label: 'twin', stroke: css('--twin', '#e65100'), width: 1.5, dash: [5, 3] },
+    ],
+    hooks: { draw: [errorBars(1, () => cols.mu), errorBars(2, () => cols.ps)] },
+  }, [m.wavelengths_nm, cols.m, cols.p], el);
+}
+
+// A twin prediction (twin.predict) as columns against θr at the channel nearest nm.
+export function predictionColumns(predictions, nm) {
+  const rows = predictions.map((q) => {
+    let c = 0;
+    q.wavelengths_nm.forEach((w, i) => { if (Math.abs(w - nm) < Math.abs(q.wavelengths_nm[c] - nm)) c = i; });
+    return [q.geometry.theta_r, q.radiance_factor[c], q.std_error[c]];
+  }).sort((a, b) => a[0] - b[0]);
+  return [rows.map((r) => r[0]), rows.map((r) => r[1]), rows.map((r) => r[2])];
+}
+
+export function predictionPlot(el, cols, { nm, width, height }) {
+  return new uPlot({
+    width, height,
+    scales: { x: { time: false } },
+    axes: [{ label: 'θr (°)' }, { label: `β at ${nm} nm`, size: 60 }],
+    series: [{ label: 'θr' }, { label: 'twin β ± s.e.', stroke: css('--twin', '#e65100'), width: 1.5 }],
+    hooks: { draw: [errorBars(1, () => cols[2])] },
+  }, [cols[0], cols[1]], el);
+}

@@ -1,0 +1,91 @@
+// The queue: the running scan and the waiting ones (queued, paused, interrupted) with their actions,
+// and the submit form, whose API errors are shown at the field they name.
+import { useState } from 'preact/hooks';
+import { html, Field, fieldErrors } from './ui.js';
+import { can, scanActions, submitParams } from './logic.js';
+
+const FIELDS = ['sample', 'name', 'grids', 'geometries', 'wavelengths', 'repeats', 'reference', 'priority'];
+
+export function SubmitForm({ samples, call, onSubmitted }) {
+  const [form, setForm] = useState({ sample: '', name: '', grids: 'in=45;out=-30:80:2', wavelengths: '400:700:10', repeats: '1', reference: 'every_point', interval: '10', priority: '0' });
+  const [errors, setErrors] = useState({});
+  const [busy, setBusy] = useState(false);
+  const set = (k) => (e) => setForm({ ...form, [k]: e.currentTarget.value });
+  const sample = form.sample || (samples[0] ? String(samples[0].id) : '');
+  const submit = async (e) => {
+    e.preventDefault();
+    setBusy(true);
+    try {
+      const scan = await call('scan.submit', submitParams({ ...form, sample }));
+      setErrors({});
+      onSubmitted(scan);
+    } catch (err) {
+      const fe = fieldErrors(err, FIELDS);
+      if (fe.geometries) fe.grids = fe.geometries; // the form has one field for both
+      setErrors(fe);
+    }
+    setBusy(false);
+  };
+  const input = (k, type = 'text', extra = {}) => (id, describedby) =>
+    html`<input id=${id} name=${k} type=${type} value=${form[k]} onInput=${set(k)} aria-invalid=${errors[k] ? 'true' : 'false'} aria-describedby=${describedby} ...${extra} />`;
+  return html`<form class="submit" data-testid="scan-submit" onSubmit=${submit} aria-label="Submit a scan" novalidate>
+    <${Field} name="sample" label="Sample" error=${errors.sample}>${(id) => html`
+      <select id=${id} name="sample" value=${sample} onChange=${set('sample')}>
+        ${samples.map((s) => html`<option value=${String(s.id)}>${s.name}${s.bsdf ? '' : ' (no twin)'}</option>`)}
+      </select>`}<//>
+    <${Field} name="name" label="Label" error=${errors.name}>${input('name')}<//>
+    <${Field} name="grids" label="Geometry grid" error=${errors.grids} hint="in=45;out=-30:80:2 (one per line)">${(id, d) => html`
+      <textarea id=${id} name="grids" rows="2" value=${form.grids} onInput=${set('grids')} aria-invalid=${errors.grids ? 'true' : 'false'} aria-describedby=${d}></textarea>`}<//>
+    <${Field} name="wavelengths" label="Wavelengths (nm)" error=${errors.wavelengths}>${input('wavelengths')}<//>
+    <div class="row">
+      <${Field} name="repeats" label="Repeats" error=${errors.repeats}>${input('repeats', 'number', { min: 1, max: 100 })}<//>
+      <${Field} name="priority" label="Priority" error=${errors.priority}>${input('priority', 'number', { min: -100, max: 100 })}<//>
+    </div>
+    <div class="row">
+      <${Field} name="reference" label="Reference white" error=${errors.reference}>${(id) => html`
+        <select id=${id} name="reference" value=${form.reference} onChange=${set('reference')}>
+          <option value="every_point">every point</option>
+          <option value="interval">every n points</option>
+          <option value="start">once at the start</option>
+        </select>`}<//>
+      ${form.reference === 'interval' && html`<${Field} name="interval" label="n" error=${errors.interval}>${input('interval', 'number', { min: 1 })}<//>`}
+    </div>
+    ${errors._form && html`<div class="form-error" role="alert" data-testid="submit-error">${errors._form}</div>`}
+    <button type="submit" data-testid="scan-submit-button" disabled=${busy || !sample}>Submit scan</button>
+  </form>`;
+}
+
+function ScanRow({ scan, index, last, role, call, notify, onSelect, selected }) {
+  const act = async (method, params) => {
+    try { await call(method, params); } catch (e) { notify(`${method}: ${e.message}`); }
+  };
+  const actions = can(role, 'control') ? scanActions(scan.state) : [];
+  const pct = scan.points_total ? Math.round((100 * scan.points_done) / scan.points_total) : 0;
+  return html`<li class=${`scan state-${scan.state}${selected ? ' selected' : ''}`} data-testid=${`queue-item-${scan.id}`} data-state=${scan.state}>
+    <button class="link" onClick=${() => onSelect(scan.id)} aria-label=${`show scan ${scan.id}`}>#${scan.id} ${scan.plan && scan.plan.name ? scan.plan.name : ''}</button>
+    <span class="badge">${scan.state}</span>
+    <progress max="100" value=${pct} aria-label="progress"></progress>
+    <span class="muted">${scan.points_done}/${scan.points_total}${scan.points_diverged ? ` · ${scan.points_diverged} diverged` : ''}</span>
+    ${scan.reason && html`<span class="muted reason">${scan.reason}</span>`}
+    <span class="actions">
+      ${actions.includes('pause') && html`<button data-testid="scan-pause" onClick=${() => act('scan.pause', { scan: scan.id, reason: 'paused from the dashboard' })}>Pause</button>`}
+      ${actions.includes('resume') && html`<button data-testid="scan-resume" onClick=${() => act('scan.resume', { scan: scan.id })}>Resume</button>`}
+      ${actions.includes('reorder') && html`<button aria-label="earlier" data-testid="queue-up" disabled=${index === 0} onClick=${() => act('queue.reorder', { scan: scan.id, position: index - 1 })}>↑</button>
+        <button aria-label="later" data-testid="queue-down" disabled=${last} onClick=${() => act('queue.reorder', { scan: scan.id, position: index + 1 })}>↓</button>`}
+      ${actions.includes('cancel') && html`<button class="danger" data-testid="scan-cancel" onClick=${() => act('scan.cancel', { scan: scan.id, reason: 'cancelled from the dashboard' })}>Cancel</button>`}
+    </span>
+  </li>`;
+}
+
+export function QueuePanel({ queue, role, call, notify, selected, onSelect }) {
+  const waiting = (queue && queue.waiting) || [];
+  const running = queue && queue.running ? [queue.running] : [];
+  return html`<section class="panel queue-panel" aria-labelledby="h-queue">
+    <h2 id="h-queue">Queue</h2>
+    <ul class="queue" data-testid="queue">
+      ${running.map((s) => html`<${ScanRow} key=${s.id} scan=${s} index=${0} last=${true} role=${role} call=${call} notify=${notify} onSelect=${onSelect} selected=${selected === s.id} />`)}
+      ${waiting.map((s, i) => html`<${ScanRow} key=${s.id} scan=${s} index=${i} last=${i === waiting.length - 1} role=${role} call=${call} notify=${notify} onSelect=${onSelect} selected=${selected === s.id} />`)}
+      ${running.length + waiting.length === 0 && html`<li class="muted">nothing running or waiting</li>`}
+    </ul>
+  </section>`;
+}

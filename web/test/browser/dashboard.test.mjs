@@ -1,0 +1,224 @@
+// The dashboard in a real headless Chromium against a real `goniod --mock`: one browser and
+// one goniod for the whole file (run by ctest as web.browser). Screenshots go to
+// $GONIO_ARTIFACTS (default: ./artifacts). Exits 77 (skipped) without a Chromium.
+import { describe, it, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { copyFileSync, mkdirSync } from 'node:fs';
+import { join, resolve, dirname } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import puppeteer from 'puppeteer-core';
+import { Goniod, chromiumPath, launchArgs } from './goniod.mjs';
+
+const here = dirname(fileURLToPath(import.meta.url));
+const chromium = chromiumPath();
+if (!chromium) {
+  console.log('SKIP: no Chromium (install the chromium package, or set GONIO_CHROMIUM)');
+  process.exit(77);
+}
+const exe = process.env.GONIO_GONIOD;
+const webRoot = resolve(process.env.GONIO_WEB_DIST || join(here, '..', '..', 'dist'));
+const artifacts = resolve(process.env.GONIO_ARTIFACTS || 'artifacts');
+mkdirSync(artifacts, { recursive: true });
+if (!exe) throw new Error('GONIO_GONIOD must name the goniod binary');
+
+const T = 60000; // the longest wait for one step: generous for a loaded 2-core CI machine; never a measurement
+
+describe('dashboard', () => {
+  let g, browser, page, tech, viewer;
+  const problems = []; // page errors and CSP violations, checked at the end
+
+  const $ = (id) => `[data-testid="${id}"]`;
+  const shot = (name) => page.screenshot({ path: join(artifacts, `${name}.png`), fullPage: true });
+  // Replaces a field's text through input events, as a user would: a value set behind the
+  // UI's back is put back by its next render.
+  const fill = async (sel, text) => {
+    await page.$eval(sel, (e) => { e.value = ''; e.dispatchEvent(new Event('input', { bubbles: true })); });
+    await page.type(sel, text);
+  };
+  const attr = (sel, name) => page.$eval(sel, (e, n) => e.getAttribute(n), name);
+  const points = () => page.$eval($('scan-plot'), (e) => Number(e.dataset.points || 0));
+  const waitPoints = (n) => page.waitForFunction((s, k) => Number(document.querySelector(s)?.dataset.points || 0) >= k, { timeout: T }, $('scan-plot'), n);
+  const watch = (p) => {
+    p.on('pageerror', (e) => problems.push(`pageerror: ${e.message}`));
+    p.on('console', (m) => { if (/Content Security Policy|Refused to/.test(m.text())) problems.push(`console: ${m.text()}`); });
+  };
+  const login = async (p, token) => {
+    await p.goto(g.url, { waitUntil: 'load' });
+    await p.waitForSelector($('login-token'), { timeout: T });
+    await p.type($('login-token'), token);
+    await p.click($('login-submit'));
+    await p.waitForSelector($('instrument-state'), { timeout: T });
+    await p.waitForFunction((s) => document.querySelector(s)?.textContent === 'connected', { timeout: T }, $('link-state'));
+  };
+
+  before(async () => {
+    g = await new Goniod({ exe, webRoot, timeScale: 0.5 }).start();
+    tech = await g.token('lab-tech', 'technician');
+    viewer = await g.token('lab-viewer', 'viewer');
+    // The mock's true sample is lambert:albedo=0.6: "grey" diverges from it.
+    await g.call('sample.create', { name: 'grey', bsdf: 'lambert:albedo=0.3' });
+    browser = await puppeteer.launch({ executablePath: chromium, headless: true, args: launchArgs() });
+    page = await browser.newPage();
+    await page.setViewport({ width: 1280, height: 800 });
+    watch(page);
+  });
+
+  after(async () => {
+    if (browser) await browser.close();
+    if (g) {
+      await g.stop();
+      copyFileSync(join(g.state, 'goniod.log'), join(artifacts, 'goniod.log')); // an artefact like the screenshots
+      await g.dispose();
+    }
+  });
+
+  it('serves the page with a strict CSP and logs in with a token', async () => {
+    const res = await fetch(g.url + '/');
+    const csp = res.headers.get('content-security-policy');
+    assert.match(csp, /default-src 'self'/);
+    assert.doesNotMatch(csp, /unsafe-inline|unsafe-eval/);
+    assert.equal(res.headers.get('cache-control'), 'no-cache');
+    await login(page, tech);
+    assert.equal(await page.$eval($('whoami'), (e) => e.textContent), 'lab-tech (technician)');
+    assert.equal(await page.evaluate(() => sessionStorage.getItem('gonio.token') !== null), true);
+    assert.doesNotMatch(page.url(), /token|[0-9a-f]{64}/);
+    await shot('01-logged-in');
+  });
+
+  it('shows the API error of a bad grid at the field', async () => {
+    await page.waitForSelector(`${$('scan-submit')} select[name=sample] option`, { timeout: T });
+    const grid = `${$('scan-submit')} textarea[name=grids]`;
+    await fill(grid, 'in=45;out=-30:80:bad');
+    await page.click($('scan-submit-button'));
+    await page.waitForSelector($('field-error-grids'), { timeout: T });
+    const text = await page.$eval($('field-error-grids'), (e) => e.textContent);
+    assert.match(text, /grids\[0\]/);
+    assert.equal(await attr(grid, 'aria-invalid'), 'true');
+    await shot('02-bad-grid');
+  });
+
+  // Before the scan: its predictions would queue ahead of these in the (one-thread) twin pool.
+  it('previews a sample\'s predicted curve, then creates it', async () => {
+    await page.click($('nav-samples'));
+    const form = $('sample-create');
+    await page.waitForSelector(form, { timeout: T });
+    await page.type(`${form} #f-name`, 'glossy');
+    await page.type(`${form} #f-bsdf`, 'lambert:albedo=0.5+coat:alpha=0.05,ior=1.5');
+    await page.click($('sample-preview'));
+    await page.waitForSelector(`${$('sample-preview-plot')} canvas`, { timeout: T });
+    await page.click(`${form} button[type=submit]`);
+    await page.waitForFunction((s) => [...document.querySelectorAll(`${s} td`)].some((td) => td.textContent === 'glossy'), { timeout: T }, $('samples'));
+    assert.equal((await g.call('sample.get', { sample: 'glossy' })).name, 'glossy');
+    await shot('02a-samples');
+  });
+
+  it('predicts in the twin playground', async () => {
+    await page.click($('nav-twin'));
+    await page.waitForSelector(`${$('twin-form')} button[type=submit]`, { timeout: T });
+    await fill(`${$('twin-form')} #f-grids`, 'in=45;out=-60:60:20');
+    await fill(`${$('twin-form')} #f-wavelengths`, '500:600:50');
+    await page.click(`${$('twin-form')} button[type=submit]`);
+    await page.waitForSelector(`${$('twin-plot')} canvas, ${$('twin-form')} .form-error, ${$('twin-form')} .field-error`, { timeout: T });
+    assert.equal(await page.$eval($('twin-form'), (f) => f.querySelector('.form-error, .field-error')?.textContent ?? null), null);
+    await shot('02b-twin');
+    await page.click($('nav-run'));
+    await page.waitForSelector($('scan-plot'), { timeout: T });
+  });
+
+  it('submits a scan from the form and plots its points as they arrive', async () => {
+    const grid = `${$('scan-submit')} textarea[name=grids]`;
+    await fill(grid, 'in=45;out=-30:80:1');
+    await page.click($('scan-submit-button'));
+    await page.waitForSelector(`${$('queue')} ${$('queue-item-1')}, ${$('scan-submit')} .form-error, ${$('scan-submit')} .field-error`, { timeout: T });
+    assert.equal(await page.$eval($('scan-submit'), (f) => f.querySelector('.form-error, .field-error')?.textContent ?? null), null);
+    await page.waitForSelector(`${$('queue')} [data-state="running"]`, { timeout: T });
+    await waitPoints(3);
+    const first = await points();
+    await waitPoints(first + 2);
+    assert.ok((await points()) > first, 'more points after the first ones');
+    await shot('03-scan-running');
+  });
+
+  it('pauses and resumes the scan', async () => {
+    await page.click(`${$('queue')} [data-state="running"] ${$('scan-pause')}`);
+    await page.waitForSelector(`${$('queue')} [data-state="paused"]`, { timeout: T });
+    const held = await points();
+    await shot('04-paused');
+    // The scan's state is the server's: nothing is committed while paused (one point may
+    // have been in progress when the pause arrived).
+    const scan = (await g.call('scan.list', { state: 'paused' }))[0];
+    assert.ok(scan && scan.points_done <= held + 1);
+    await page.click(`${$('queue')} [data-state="paused"] ${$('scan-resume')}`);
+    await page.waitForSelector(`${$('queue')} [data-state="running"]`, { timeout: T });
+    await waitPoints(held + 2);
+  });
+
+  it('raises a divergence alert and acknowledges it', async () => {
+    await page.waitForFunction((s) => Number(document.querySelector(s)?.textContent) > 0, { timeout: T }, $('alert-count'));
+    const before = Number(await page.$eval($('alert-count'), (e) => e.textContent));
+    await page.click($('nav-alerts'));
+    await page.waitForSelector(`${$('alerts')} [data-kind="divergence"]`, { timeout: T });
+    await shot('05-alerts');
+    await page.click(`${$('alerts')} [data-kind="divergence"] ${$('alert-ack')}`);
+    await page.waitForSelector(`${$('alerts')} [data-kind="divergence"][data-acknowledged="true"]`, { timeout: T });
+    // The running scan may raise a new divergence alert at once (an acknowledged alert no
+    // longer absorbs repeats): the counter is the number of unacknowledged ones listed.
+    await page.waitForFunction((c, l) => Number(document.querySelector(c).textContent) === document.querySelectorAll(`${l} [data-acknowledged="false"]`).length,
+      { timeout: T }, $('alert-count'), $('alerts'));
+    assert.ok(before > 0);
+    await page.click($('nav-run'));
+    await page.waitForSelector($('scan-plot'), { timeout: T });
+  });
+
+  it('shows a clicked point’s spectra and colours', async () => {
+    await waitPoints(1);
+    const box = await (await page.$(`${$('scan-plot')} .u-over`)).boundingBox();
+    // Sweep across the plot until the cursor lands on a point.
+    for (let x = 5; x < box.width && !(await page.$($('point-details'))); x += box.width / 12) {
+      await page.mouse.click(box.x + x, box.y + box.height / 2);
+    }
+    await page.waitForSelector(`${$('point-details')} .chip`, { timeout: T });
+    const lab = await page.$eval($('point-details'), (e) => e.textContent);
+    assert.match(lab, /L\* \d/);
+    await shot('06-point-details');
+  });
+
+  it('keeps working across a goniod restart', async () => {
+    // A scan long enough to be running through the restart, shown in the plot.
+    if (!(await g.call('queue.status')).running) {
+      const s = await g.call('scan.submit', { sample: 'grey', grids: 'in=45;out=-30:80:1', repeats: 2 });
+      await page.waitForSelector(`${$(`queue-item-${s.id}`)} button.link`, { timeout: T });
+      await page.click(`${$(`queue-item-${s.id}`)} button.link`);
+    }
+    await waitPoints(2);
+    const n = await points();
+    await g.stop();
+    await page.waitForSelector($('disconnected'), { timeout: T });
+    await shot('07-disconnected');
+    await g.start(); // the same port; the interrupted scan resumes first
+    await page.waitForFunction((s) => !document.querySelector(s), { timeout: T }, $('disconnected'));
+    await page.waitForFunction((s) => document.querySelector(s)?.textContent === 'connected', { timeout: T }, $('link-state'));
+    await waitPoints(n + 2); // notifications flow again: the page subscribed anew
+    await shot('08-reconnected');
+  });
+
+  it('shows a viewer no controls', async () => {
+    const ctx = await browser.createBrowserContext();
+    const v = await ctx.newPage();
+    await v.setViewport({ width: 1280, height: 800 });
+    watch(v);
+    await login(v, viewer);
+    await v.waitForSelector(`${$('queue')} li`, { timeout: T });
+    for (const id of ['instrument-stop', 'scan-submit', 'scan-pause', 'scan-resume', 'scan-cancel', 'queue-up'])
+      assert.equal(await v.$($(id)), null, `a viewer sees ${id}`);
+    await v.click($('nav-alerts'));
+    await v.waitForSelector(`${$('alerts')} li`, { timeout: T });
+    assert.equal(await v.$($('alert-ack')), null, 'a viewer sees alert-ack');
+    await v.screenshot({ path: join(artifacts, '09-viewer.png'), fullPage: true });
+    await ctx.close();
+  });
+
+  it('met no page errors and no CSP violations', () => {
+    assert.deepEqual(problems, []);
+  });
+});
