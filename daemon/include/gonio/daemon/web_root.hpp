@@ -1,5 +1,5 @@
 // The dashboard's files (web/, installed to /usr/share/gonio/web), served by the HTTP
-// listener (docs/architecture.md §11).
+// listener (docs/architecture.md §12).
 //
 // The whole tree is read into memory at start: a request is answered by an exact lookup of
 // its path among the files that were there, so no request can name a file outside the root
