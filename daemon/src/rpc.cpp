@@ -12,6 +12,8 @@ constexpr auto kInvalidUtf8 = nlohmann::json::error_handler_t::replace;
 
 using nlohmann::json;
 
+std::string to_text(const nlohmann::json& j) { return j.dump(-1, ' ', false, kInvalidUtf8); }
+
 namespace {
 
 constexpr std::size_t kMaxDepth = 64;
