@@ -79,7 +79,7 @@ void Hub::publish(Topic topic, std::string_view method, const nlohmann::json& pa
     std::lock_guard lock(mu_);
     tap = tap_;
   }
-  if (tap) (*tap)(method, rpc::to_text(params), scan);
+  if (tap) (*tap)(method, rpc::json_text(params), scan);
   const auto to = targets(topic, scan);
   if (to.empty()) return;
   deliver(to, std::make_shared<const std::string>(rpc::notification(method, params)));

@@ -65,7 +65,7 @@ std::string bearer(beast::string_view header) {
 
 std::string error_body(int code, std::string_view msg, Errc errc, std::string_view field = {}) {
   // msg may quote the peer's bytes (the target, Origin, Content-Type): never UTF-8 by promise.
-  return rpc::to_text(json{{"jsonrpc", "2.0"}, {"error", rpc::error_object(code, msg, errc, field)}, {"id", nullptr}});
+  return rpc::json_text(json{{"jsonrpc", "2.0"}, {"error", rpc::error_object(code, msg, errc, field)}, {"id", nullptr}});
 }
 
 std::string lower(std::string_view s) {

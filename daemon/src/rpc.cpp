@@ -12,7 +12,7 @@ constexpr auto kInvalidUtf8 = nlohmann::json::error_handler_t::replace;
 
 using nlohmann::json;
 
-std::string to_text(const nlohmann::json& j) { return j.dump(-1, ' ', false, kInvalidUtf8); }
+std::string json_text(const nlohmann::json& j) { return j.dump(-1, ' ', false, kInvalidUtf8); }
 
 namespace {
 

@@ -68,7 +68,7 @@ nlohmann::json error_object(const Error& e);
 
 // JSON text of `j` that never throws: text that is not UTF-8 (a peer's bytes quoted in an
 // error, a device message) is written with U+FFFD. Everything sent to a peer goes through it.
-std::string to_text(const nlohmann::json& j);
+std::string json_text(const nlohmann::json& j);
 
 // One connection (or one HTTP request): who is calling and how to push notifications.
 class Session {
