@@ -10,7 +10,7 @@
 source "$(dirname "$0")/common.sh"
 
 for tool in cpack dpkg-deb dpkg-shlibdeps file; do
-  command -v "$tool" >/dev/null || skip "$tool not found: .ci/bootstrap installs cmake, dpkg-dev and file"
+  command -v "$tool" >/dev/null || skip "$tool not found: .ci/bootstrap --release installs cmake, dpkg-dev and file"
 done
 [[ -d $root$bindir ]] || { fail "the installed tree is missing (deploy.install_tree did not run?)"; finish; }
 
