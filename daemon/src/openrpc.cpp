@@ -1,11 +1,10 @@
-// The embedded OpenRPC document (proto/openrpc.json, generated into openrpc_text.cpp).
+// The embedded OpenRPC document (proto/openrpc.json, embedded by the proto library).
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "gonio/daemon/methods.hpp"
-
-extern const char* const gonio_openrpc_json;
+#include "gonio/proto/openrpc_text.hpp"
 
 namespace gonio::daemon {
 
