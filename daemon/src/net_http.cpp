@@ -18,6 +18,7 @@
 #include <spdlog/spdlog.h>
 
 #include "gonio/daemon/net.hpp"
+#include "net_accept.hpp"
 
 namespace gonio::daemon::net {
 
@@ -558,32 +559,18 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
  public:
   HttpListener(asio::io_context& io, tcp::acceptor acceptor, std::string endpoint,
                std::shared_ptr<HttpState> st)
-      : io_(io), acceptor_(std::move(acceptor)), backoff_timer_(acceptor_.get_executor()),
+      : io_(io), acceptor_(std::move(acceptor)), backoff_(acceptor_.get_executor()),
         endpoint_(std::move(endpoint)), st_(std::move(st)) {}
 
   void accept() {
     acceptor_.async_accept(asio::make_strand(io_), [self = shared_from_this()](const error_code& ec, tcp::socket s) {
       if (ec) {
         if (ec == asio::error::operation_aborted || !self->acceptor_.is_open()) return;
-        if (ec == asio::error::no_descriptors || ec == boost::system::errc::too_many_files_open_in_system ||
-            ec == asio::error::no_buffer_space || ec == asio::error::no_memory) {
-          // Out of file descriptors: wait (100 ms, doubling to 2 s) instead of spinning.
-          ++self->st_->ctx.stats.accept_backoffs;
-          self->backoff_ = std::min(std::max(2 * self->backoff_, std::chrono::milliseconds(100)),
-                                    std::chrono::milliseconds(2000));
-          spdlog::warn("{}: accept: {}; retrying in {} ms", self->endpoint_, ec.message(),
-                       self->backoff_.count());
-          self->backoff_timer_.expires_after(self->backoff_);
-          self->backoff_timer_.async_wait([self](const error_code& e) {
-            if (!e) self->accept();
-          });
-          return;
-        }
-        spdlog::warn("{}: accept: {}", self->endpoint_, ec.message());
-        self->accept();
+        self->backoff_.failed(ec, self->endpoint_, self->st_->ctx.stats.accept_backoffs,
+                              [self] { self->accept(); });
         return;
       }
-      self->backoff_ = std::chrono::milliseconds(0);
+      self->backoff_.succeeded();
       ++self->st_->accepted;
       if (self->st_->connections.load() + self->st_->websockets.load() >=
           self->st_->ctx.limits.max_connections) {
@@ -606,7 +593,7 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
     asio::post(acceptor_.get_executor(), [self = shared_from_this()] {
       error_code ignored;
       self->acceptor_.close(ignored);
-      self->backoff_timer_.cancel();
+      self->backoff_.cancel();
     });
     std::vector<std::pair<std::weak_ptr<void>, std::function<void()>>> closers;
     {
@@ -642,8 +629,7 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
  private:
   asio::io_context& io_;
   tcp::acceptor acceptor_;
-  asio::steady_timer backoff_timer_;
-  std::chrono::milliseconds backoff_{0};
+  AcceptBackoff backoff_;
   std::string endpoint_;
   std::shared_ptr<HttpState> st_;
 };

@@ -26,6 +26,7 @@
 #include <spdlog/spdlog.h>
 
 #include "gonio/daemon/net.hpp"
+#include "net_accept.hpp"
 
 namespace gonio::daemon::net {
 
@@ -80,13 +81,6 @@ Role unix_role(const Limits& l, std::uint32_t uid, const std::vector<gid_t>& gid
   if (has(l.technician_uids, uid) || any_gid(l.technician_gids)) return Role::technician;
   if (has(l.viewer_uids, uid) || any_gid(l.viewer_gids)) return Role::viewer;
   return Role::none;
-}
-
-// Whether an accept() failed for want of file descriptors: the listener then waits rather
-// than spinning on a backlog it cannot take.
-bool out_of_descriptors(const error_code& ec) {
-  return ec == asio::error::no_descriptors || ec == boost::system::errc::too_many_files_open_in_system ||
-         ec == asio::error::no_buffer_space || ec == asio::error::no_memory;
 }
 
 namespace {
@@ -478,7 +472,7 @@ class NdjsonListener final : public Listener,
 
   NdjsonListener(asio::io_context& io, Acceptor acceptor, std::string endpoint,
                  std::shared_ptr<ListenerState> ls)
-      : io_(io), acceptor_(std::move(acceptor)), backoff_timer_(acceptor_.get_executor()),
+      : io_(io), acceptor_(std::move(acceptor)), backoff_(acceptor_.get_executor()),
         endpoint_(std::move(endpoint)), ls_(std::move(ls)) {}
 
   void accept() {
@@ -487,24 +481,11 @@ class NdjsonListener final : public Listener,
                                                        typename Protocol::socket socket) {
       if (ec) {
         if (ec == asio::error::operation_aborted || !self->acceptor_.is_open()) return;
-        if (out_of_descriptors(ec)) {
-          // Out of file descriptors: wait (100 ms, doubling to 2 s) instead of spinning.
-          ++self->ls_->ctx.stats.accept_backoffs;
-          self->backoff_ = std::min(std::max(2 * self->backoff_, std::chrono::milliseconds(100)),
-                                    std::chrono::milliseconds(2000));
-          spdlog::warn("{}: accept: {}; retrying in {} ms", self->endpoint_, ec.message(),
-                       self->backoff_.count());
-          self->backoff_timer_.expires_after(self->backoff_);
-          self->backoff_timer_.async_wait([self](const error_code& e) {
-            if (!e) self->accept();
-          });
-          return;
-        }
-        spdlog::warn("{}: accept: {}", self->endpoint_, ec.message());
-        self->accept();
+        self->backoff_.failed(ec, self->endpoint_, self->ls_->ctx.stats.accept_backoffs,
+                              [self] { self->accept(); });
         return;
       }
-      self->backoff_ = std::chrono::milliseconds(0);
+      self->backoff_.succeeded();
       self->on_accept(std::move(socket));
       self->accept();
     });
@@ -532,7 +513,7 @@ class NdjsonListener final : public Listener,
     asio::post(acceptor_.get_executor(), [self = this->shared_from_this()] {
       error_code ignored;
       self->acceptor_.close(ignored);
-      self->backoff_timer_.cancel();
+      self->backoff_.cancel();
     });
     std::vector<std::weak_ptr<rpc::Session>> sessions;
     {
@@ -614,8 +595,7 @@ class NdjsonListener final : public Listener,
 
   asio::io_context& io_;
   Acceptor acceptor_;
-  asio::steady_timer backoff_timer_;
-  std::chrono::milliseconds backoff_{0};
+  AcceptBackoff backoff_;
   std::string endpoint_;
   std::shared_ptr<ListenerState> ls_;
 };

@@ -1,8 +1,10 @@
 // Hostile clients against a real goniod: amplifying batches, peers that do not read or do
 // not log in, browsers on foreign pages, revoked tokens on live connections; and the fault
-// latch across a crash.
+// latch across a crash; a listener out of file descriptors.
 #include <grp.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -104,6 +106,31 @@ TEST(Hostile, APeerThatDoesNotReadIsDroppedAndCounted) {
   EXPECT_TRUE(c.closed_by_peer(10s));
   EXPECT_LT(net_stats(g)["buffered_bytes"].get<std::size_t>(), std::size_t{65536});
   EXPECT_TRUE(g.unix_conn().request("system.info").contains("result"));  // the server carries on
+}
+
+// A listener out of file descriptors backs off (counted, logged) rather than spinning on the
+// connection it cannot take, and serves again once descriptors are free.
+TEST(Hostile, AListenerOutOfDescriptorsBacksOffAndRecovers) {
+  TempDir dir;
+  Goniod g(dir.path, mock_config({}));
+  rlimit was{};
+  ASSERT_EQ(::prlimit(g.pid(), RLIMIT_NOFILE, nullptr, &was), 0);
+  const auto open_now = static_cast<rlim_t>(std::distance(
+      fs::directory_iterator("/proc/" + std::to_string(g.pid()) + "/fd"), fs::directory_iterator{}));
+  rlimit tight{open_now + 3, was.rlim_max};  // room for three more connections
+  ASSERT_EQ(::prlimit(g.pid(), RLIMIT_NOFILE, &tight, nullptr), 0);
+  std::vector<int> peers;
+  for (int i = 0; i < 8; ++i) peers.push_back(connect_tcp("127.0.0.1", g.tcp_port()));
+  const bool backed_off = eventually([&] {
+    return g.log_text().find("accept: Too many open files; retrying in") != std::string::npos;
+  }, 20s);
+  for (int fd : peers) ::close(fd);
+  ASSERT_EQ(::prlimit(g.pid(), RLIMIT_NOFILE, &was, nullptr), 0);
+  EXPECT_TRUE(backed_off) << g.log_text();
+  // Serving again: a new TCP peer gets its answer (after at most one 2 s back-off).
+  auto c = g.tcp_conn();
+  EXPECT_TRUE(c.request("rpc.discover").contains("result"));
+  EXPECT_GE(net_stats(g)["accept_backoffs"].get<int>(), 1);
 }
 
 TEST(Hostile, PeersThatDoNotLogInAreDropped) {
