@@ -123,11 +123,6 @@ void Diagnoser::request(std::int64_t scan_id, std::int64_t alert_id) {
   cv_.notify_all();
 }
 
-void Diagnoser::drain() {
-  std::unique_lock lock(mu_);
-  cv_.wait(lock, [this] { return queue_.empty() && !busy_; });
-}
-
 void Diagnoser::work() {
   for (;;) {
     Job job;
@@ -137,7 +132,6 @@ void Diagnoser::work() {
       if (stopping_) return;
       job = queue_.front();
       queue_.pop_front();
-      busy_ = true;
     }
     try {
       diagnose(job);
@@ -145,11 +139,6 @@ void Diagnoser::work() {
       // A diagnosis is advice: its failure is logged and never touches the scan.
       spdlog::warn("scan {}: no diagnosis of the divergence: {}", job.scan_id, e.what());
     }
-    {
-      std::lock_guard lock(mu_);
-      busy_ = false;
-    }
-    cv_.notify_all();
   }
 }
 

@@ -57,8 +57,6 @@ class Diagnoser {
   // Queues a diagnosis of scan `scan_id` for alert `alert_id`; returns at once. A scan
   // already queued is not queued twice.
   void request(std::int64_t scan_id, std::int64_t alert_id);
-  // Blocks until nothing is queued or running (tests, shutdown).
-  void drain();
 
  private:
   struct Job {
@@ -73,7 +71,7 @@ class Diagnoser {
   std::mutex mu_;
   std::condition_variable cv_;
   std::deque<Job> queue_;
-  bool busy_ = false, stopping_ = false;
+  bool stopping_ = false;
   std::thread thread_;
 };
 
