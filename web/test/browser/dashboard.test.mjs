@@ -1,30 +1,36 @@
-// The dashboard in a real headless Chromium against a real `goniod --mock`: one browser and
-// one goniod for the whole file (run by ctest as web.browser). Screenshots go to
-// $GONIO_ARTIFACTS (default: ./artifacts). Exits 77 (skipped) without a Chromium.
+// The dashboard in a real headless browser against a real `goniod --mock`: one browser and
+// one goniod for the whole file. GONIO_BROWSER picks the browser: chromium (the default;
+// ctest's web.browser) or firefox (web.browser.firefox, over WebDriver BiDi). Screenshots go
+// to $GONIO_ARTIFACTS (default: ./artifacts, ./artifacts/firefox). Exits 77 (skipped) when
+// the browser is not installed.
 import { describe, it, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { copyFileSync, mkdirSync } from 'node:fs';
 import { join, resolve, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { setTimeout as sleep } from 'node:timers/promises';
 import puppeteer from 'puppeteer-core';
-import { Goniod, chromiumPath, launchArgs } from './goniod.mjs';
+import { Goniod, browserName, chromiumPath, firefoxPath, launchBrowser } from './goniod.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
-const chromium = chromiumPath();
-if (!chromium) {
-  console.log('SKIP: no Chromium (install the chromium package, or set GONIO_CHROMIUM)');
+const name = browserName();
+const firefox = name === 'firefox';
+const executable = firefox ? firefoxPath() : chromiumPath();
+if (!executable) {
+  console.log(firefox ? 'SKIP: no Firefox (install the firefox-esr package, or set GONIO_FIREFOX)'
+    : 'SKIP: no Chromium (install the chromium package, or set GONIO_CHROMIUM)');
   process.exit(77);
 }
 const exe = process.env.GONIO_GONIOD;
 const webRoot = resolve(process.env.GONIO_WEB_DIST || join(here, '..', '..', 'dist'));
-const artifacts = resolve(process.env.GONIO_ARTIFACTS || 'artifacts');
+const artifacts = resolve(process.env.GONIO_ARTIFACTS || (firefox ? 'artifacts/firefox' : 'artifacts'));
 mkdirSync(artifacts, { recursive: true });
 if (!exe) throw new Error('GONIO_GONIOD must name the goniod binary');
 
 const T = 60000; // the longest wait for one step: generous for a loaded 2-core CI machine; never a measurement
 
 describe('dashboard', () => {
-  let g, browser, page, tech, viewer;
+  let g, launched, browser, page, tech, viewer;
   const problems = []; // page errors and CSP violations, checked at the end
 
   const $ = (id) => `[data-testid="${id}"]`;
@@ -38,9 +44,16 @@ describe('dashboard', () => {
   const attr = (sel, name) => page.$eval(sel, (e, n) => e.getAttribute(n), name);
   const points = () => page.$eval($('scan-plot'), (e) => Number(e.dataset.points || 0));
   const waitPoints = (n) => page.waitForFunction((s, k) => Number(document.querySelector(s)?.dataset.points || 0) >= k, { timeout: T }, $('scan-plot'), n);
-  const watch = (p) => {
-    p.on('pageerror', (e) => problems.push(`pageerror: ${e.message}`));
-    p.on('console', (m) => { if (/Content Security Policy|Refused to/.test(m.text())) problems.push(`console: ${m.text()}`); });
+  // Chromium reports a CSP violation on the console ("Refused to …", "… violates the following
+  // Content Security Policy directive …"), Firefox as a page error ("Content-Security-Policy:
+  // The page's settings blocked …"): both are caught. Firefox also reports a failed WebSocket
+  // connection as a page error ("Firefox can’t establish a connection to the server at
+  // ws://…"; Chromium's goes to the console): expected while goniod is stopped on purpose
+  // (`down`), a problem at any other time.
+  let down = false;
+  const watch = (p, sink = problems) => {
+    p.on('pageerror', (e) => { if (!(down && /establish a connection to the server at ws:/.test(e.message))) sink.push(`pageerror: ${e.message}`); });
+    p.on('console', (m) => { if (/Content.Security.Policy|Refused to/.test(m.text())) sink.push(`console: ${m.text()}`); });
   };
   const login = async (p, token) => {
     await p.goto(g.url, { waitUntil: 'load' });
@@ -51,20 +64,26 @@ describe('dashboard', () => {
     await p.waitForFunction((s) => document.querySelector(s)?.textContent === 'connected', { timeout: T }, $('link-state'));
   };
 
+  // Polls goniod (or anything outside the page) until ok() holds.
+  const until = async (what, ok) => {
+    for (const end = Date.now() + T; !(await ok()); await sleep(100)) assert.ok(Date.now() < end, what);
+  };
+
   before(async () => {
     g = await new Goniod({ exe, webRoot, timeScale: 0.5 }).start();
     tech = await g.token('lab-tech', 'technician');
     viewer = await g.token('lab-viewer', 'viewer');
     // The mock's true sample is lambert:albedo=0.6: "grey" diverges from it.
     await g.call('sample.create', { name: 'grey', bsdf: 'lambert:albedo=0.3' });
-    browser = await puppeteer.launch({ executablePath: chromium, headless: true, args: launchArgs() });
+    launched = await launchBrowser(puppeteer, name, executable);
+    browser = launched.browser;
     page = await browser.newPage();
     await page.setViewport({ width: 1280, height: 800 });
     watch(page);
   });
 
   after(async () => {
-    if (browser) await browser.close();
+    if (launched) await launched.close();
     if (g) {
       await g.stop();
       copyFileSync(join(g.state, 'goniod.log'), join(artifacts, 'goniod.log')); // an artefact like the screenshots
@@ -200,12 +219,14 @@ describe('dashboard', () => {
     }
     await waitPoints(2);
     const n = await points();
+    down = true;
     await g.stop();
     await page.waitForSelector($('disconnected'), { timeout: T });
     await shot('07-disconnected');
     await g.start(); // the same port; the interrupted scan resumes first
     await page.waitForFunction((s) => !document.querySelector(s), { timeout: T }, $('disconnected'));
     await page.waitForFunction((s) => document.querySelector(s)?.textContent === 'connected', { timeout: T }, $('link-state'));
+    down = false;
     await waitPoints(n + 2); // notifications flow again: the page subscribed anew
     await shot('08-reconnected');
   });
@@ -226,7 +247,16 @@ describe('dashboard', () => {
     await ctx.close();
   });
 
-  it('met no page errors and no CSP violations', () => {
+  it('met no page errors and no CSP violations', async () => {
     assert.deepEqual(problems, []);
+    // …and would have seen one: a style element the policy refuses.
+    const seen = [];
+    const p = await browser.newPage();
+    watch(p, seen);
+    await p.goto(g.url, { waitUntil: 'load' });
+    await p.evaluate(() => document.head.append(Object.assign(document.createElement('style'), { textContent: 'body { color: red }' })));
+    await until('a refused style went unseen', () => seen.length > 0);
+    assert.match(seen.join('\n'), /Content.Security.Policy/);
+    await p.close();
   });
 });
