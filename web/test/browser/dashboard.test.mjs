@@ -69,6 +69,68 @@ describe('dashboard', () => {
     for (const end = Date.now() + T; !(await ok()); await sleep(100)) assert.ok(Date.now() < end, what);
   };
 
+  // The form controls on the page without an accessible name: one needs a <label> (for= or
+  // wrapping it) with text of its own, an aria-label, or an aria-labelledby naming text.
+  const unlabelled = (p) => p.evaluate(() => {
+    const own = (label) => {
+      const c = label.cloneNode(true);
+      for (const e of c.querySelectorAll('input, select, textarea')) e.remove();
+      return c.textContent.trim() !== '';
+    };
+    const named = (e) => [...e.labels].some(own) || (e.getAttribute('aria-label') || '').trim() !== ''
+      || (e.getAttribute('aria-labelledby') || '').split(/\s+/).some((id) => id && (document.getElementById(id)?.textContent || '').trim() !== '');
+    return [...document.querySelectorAll('input:not([type=hidden]), select, textarea')].filter((e) => !named(e))
+      .map((e) => e.id || e.name || e.outerHTML.slice(0, 80));
+  });
+
+  // Where the keyboard focus is: the focused control's data-testid (or tag and text), whether
+  // it shows a focus ring, and whether it is the first or last control that Tab reaches. Tab
+  // never goes past the last control here: Firefox then moves the focus to its own toolbar,
+  // and neither a click in the page nor bringToFront gives it back to the page under BiDi.
+  const focus = (p, sel = null) => p.evaluate((sel) => {
+    const e = document.activeElement;
+    if (!e || e === document.body || !document.hasFocus()) return null;
+    const tabbable = [...document.querySelectorAll('button, input, select, textarea, a[href], [tabindex]')]
+      .filter((c) => !c.disabled && c.tabIndex >= 0 && c.getClientRects().length > 0);
+    const st = getComputedStyle(e);
+    return {
+      id: e.dataset.testid || `${e.tagName.toLowerCase()} ${(e.textContent || e.name || '').trim().slice(0, 20)}`,
+      ring: e.matches(':focus-visible') && st.outlineStyle !== 'none' && parseFloat(st.outlineWidth) > 0,
+      first: e === tabbable[0], last: e === tabbable[tabbable.length - 1], here: sel ? e.matches(sel) : false,
+    };
+  }, sel);
+  const press = async (p, key) => {
+    if (key !== 'Shift+Tab') return p.keyboard.press(key);
+    await p.keyboard.down('Shift');
+    await p.keyboard.press('Tab');
+    await p.keyboard.up('Shift');
+  };
+  // Tab from the first control to the last: the focus stops, in order.
+  const tabWalk = async (p) => {
+    for (let i = 0; i < 300 && !(await focus(p))?.first; ++i) await press(p, 'Shift+Tab');
+    const stops = [];
+    for (let i = 0; i < 300; ++i) {
+      const f = await focus(p);
+      assert.ok(f, `the focus left the page after ${stops.map((s) => s.id).join(', ')}`);
+      stops.push(f);
+      if (f.last) return stops;
+      await press(p, 'Tab');
+    }
+    assert.fail(`no last control after 300 Tabs: ${stops.map((s) => s.id).join(', ')}`);
+  };
+  // Moves the focus to `sel` with Tab (forward to the last control, then back with Shift+Tab).
+  const tabTo = async (p, sel) => {
+    for (const key of ['Tab', 'Shift+Tab']) {
+      for (let i = 0; i < 300; ++i) {
+        const f = await focus(p, sel);
+        if (f?.here) return;
+        if (f && (key === 'Tab' ? f.last : f.first)) break;
+        await press(p, key);
+      }
+    }
+    assert.fail(`${sel} is not reachable with Tab`);
+  };
+
   before(async () => {
     g = await new Goniod({ exe, webRoot, timeScale: 0.5 }).start();
     tech = await g.token('lab-tech', 'technician');
@@ -245,6 +307,95 @@ describe('dashboard', () => {
     assert.equal(await v.$($('alert-ack')), null, 'a viewer sees alert-ack');
     await v.screenshot({ path: join(artifacts, '09-viewer.png'), fullPage: true });
     await ctx.close();
+  });
+
+  it('labels every form field on every view', async () => {
+    await page.bringToFront();
+    await page.click($('nav-run'));
+    await page.waitForSelector($('plot-wavelength'), { timeout: T }); // the scan's controls too
+    assert.deepEqual(await unlabelled(page), [], 'unlabelled on the run view');
+    await page.click($('nav-alerts'));
+    await page.waitForSelector($('alerts'), { timeout: T });
+    assert.deepEqual(await unlabelled(page), [], 'unlabelled on the alerts view');
+    await page.click($('nav-samples'));
+    await page.waitForSelector($('sample-create'), { timeout: T });
+    assert.deepEqual(await unlabelled(page), [], 'unlabelled on the samples view');
+    await page.click($('nav-twin'));
+    await fill(`${$('twin-form')} #f-grids`, 'in=45;out=-60:60:20');
+    await fill(`${$('twin-form')} #f-wavelengths`, '500:600:50');
+    await page.click(`${$('twin-form')} button[type=submit]`);
+    await page.waitForSelector(`${$('twin-plot')} canvas`, { timeout: T }); // and its result's λ
+    assert.deepEqual(await unlabelled(page), [], 'unlabelled on the twin view');
+    // The check sees a field without a name.
+    await page.evaluate(() => document.body.append(Object.assign(document.createElement('input'), { id: 'nameless' })));
+    assert.deepEqual(await unlabelled(page), ['nameless']);
+    await page.evaluate(() => document.getElementById('nameless').remove());
+    await page.click($('nav-run'));
+    await page.waitForSelector($('scan-plot'), { timeout: T });
+  });
+
+  it('is reachable and operable with the keyboard alone', async () => {
+    // A fresh page, as a keyboard user opens it: the first Tab lands on the views' nav.
+    await page.bringToFront();
+    await page.reload({ waitUntil: 'load' });
+    await page.waitForFunction((s) => document.querySelector(s)?.textContent === 'connected', { timeout: T }, $('link-state'));
+    await page.waitForSelector(`${$('scan-submit')} select[name=sample] option`, { timeout: T });
+    await press(page, 'Tab');
+    assert.equal((await focus(page))?.id, 'nav-run');
+    const ids = (stops) => stops.map((s) => s.id);
+    const walk = async (view, want) => {
+      const stops = await tabWalk(page);
+      for (const id of want) assert.ok(ids(stops).includes(id), `${id} is not reached by Tab on the ${view} view: ${ids(stops).join(', ')}`);
+      assert.deepEqual(ids(stops.filter((s) => !s.ring)), [], `focus not shown on the ${view} view`);
+    };
+    await walk('run', ['nav-run', 'nav-alerts', 'nav-samples', 'nav-twin', 'instrument-stop', 'scan-submit-button']);
+
+    // A scan submitted from the keyboard, paused with Space, resumed with Enter and, after the
+    // alerts, cancelled. Its receiver swings 110° between points: the mock's moves take wall
+    // time (time_scale), so its 40 points last well over a minute on any machine.
+    const retype = async (sel, text) => {
+      await tabTo(page, sel);
+      await page.keyboard.down('Control');
+      await page.keyboard.press('a');
+      await page.keyboard.up('Control');
+      await page.keyboard.type(text);
+      assert.equal(await page.$eval(sel, (e) => e.value), text);
+    };
+    await retype(`${$('scan-submit')} #f-name`, 'keyboard');
+    await retype(`${$('scan-submit')} #f-grids`, `in=45;out=${Array(20).fill('-30,80').join(',')}`);
+    await tabTo(page, $('scan-submit-button'));
+    await press(page, 'Enter');
+    let id;
+    await until('no scan submitted from the keyboard', async () => (id = (await g.call('scan.list', { limit: 20 })).find((x) => x.plan.name === 'keyboard')?.id));
+    const row = $(`queue-item-${id}`);
+    await page.waitForSelector(`${row}[data-state="running"] ${$('scan-pause')}`, { timeout: T }); // once a scan before it is done
+    await tabTo(page, `${row} ${$('scan-pause')}`);
+    await press(page, ' ');
+    await page.waitForSelector(`${row}[data-state="paused"] ${$('scan-resume')}`, { timeout: T });
+    // The focus stayed on the button, now Resume (nothing else waits: the row kept its place).
+    assert.ok((await focus(page, `${row} ${$('scan-resume')}`))?.here, `the focus left Pause: ${JSON.stringify(await focus(page))}`);
+    await press(page, 'Enter');
+    await page.waitForSelector(`${row}[data-state="running"]`, { timeout: T });
+
+    // The alerts view by keyboard; an alert acknowledged with Space.
+    await tabTo(page, $('nav-alerts'));
+    await press(page, 'Enter');
+    await page.waitForSelector(`${$('alerts')} [data-acknowledged="false"] ${$('alert-ack')}`, { timeout: T });
+    await walk('alerts', ['nav-run', 'instrument-stop', 'alert-ack']);
+    await tabTo(page, `${$('alerts')} [data-acknowledged="false"] ${$('alert-ack')}`);
+    const alert = await page.evaluate(() => document.activeElement.closest('li').dataset.testid);
+    await press(page, ' ');
+    await page.waitForSelector(`${$(alert)}[data-acknowledged="true"]`, { timeout: T });
+    await shot('10-keyboard');
+
+    for (const [view, ready] of [['samples', 'sample-create'], ['twin', 'twin-form'], ['run', 'scan-plot']]) {
+      await tabTo(page, $(`nav-${view}`));
+      await press(page, view === 'twin' ? ' ' : 'Enter');
+      await page.waitForSelector($(ready), { timeout: T });
+    }
+    await tabTo(page, `${row} ${$('scan-cancel')}`);
+    await press(page, 'Enter');
+    await until('the keyboard\'s scan is not cancelled', async () => (await g.call('scan.get', { scan: id })).state === 'cancelled');
   });
 
   it('met no page errors and no CSP violations', async () => {
