@@ -398,6 +398,64 @@ describe('dashboard', () => {
     await until('the keyboard\'s scan is not cancelled', async () => (await g.call('scan.get', { scan: id })).state === 'cancelled');
   });
 
+  it('is usable on a tablet by touch', async () => {
+    const ctx = await browser.createBrowserContext();
+    const t = await ctx.newPage();
+    watch(t);
+    // Chromium emulates a touch screen (touch events, pointer: coarse, a mobile viewport);
+    // Firefox 153's BiDi has no touch emulation (puppeteer skips its unknown
+    // emulation.setTouchOverride), so there it is the tablet's viewport. page.tap is a touch
+    // pointer action in both.
+    const tablet = (width, height) => t.setViewport({ width, height, hasTouch: true, isMobile: true });
+    await tablet(820, 1180);
+    await t.goto(g.url, { waitUntil: 'load' });
+    await t.waitForSelector($('login-token'), { timeout: T });
+    assert.deepEqual(await unlabelled(t), [], 'unlabelled on the login page');
+    await t.tap($('login-token'));
+    await t.keyboard.type(await g.token('lab-tablet', 'technician'));
+    await t.tap($('login-submit'));
+    await t.waitForFunction((s) => document.querySelector(s)?.textContent === 'connected', { timeout: T }, $('link-state'));
+    await t.waitForSelector(`${$('scan-submit')} select[name=sample] option`, { timeout: T });
+
+    // A control a finger can hit: inside the viewport once scrolled to, on top (not under the
+    // sticky header) and at least 44 px square, the usual minimum touch target, where the page
+    // knows it is on a touch screen or narrow (Firefox's landscape tablet is neither: there
+    // 24 px, the least any pointer should have to hit).
+    const reachable = (sel) => t.$eval(sel, (e) => {
+      e.scrollIntoView({ block: 'center' });
+      const r = e.getBoundingClientRect();
+      return { inside: r.left >= 0 && r.right <= innerWidth && r.top >= 0 && r.bottom <= innerHeight,
+        onTop: e.contains(document.elementFromPoint(r.x + r.width / 2, r.y + r.height / 2)),
+        w: Math.round(r.width), h: Math.round(r.height), least: matchMedia('(pointer: coarse), (max-width: 900px)').matches ? 44 : 24 };
+    });
+    const overflow = () => t.evaluate(() => document.documentElement.scrollWidth - innerWidth);
+    const views = [['alerts', 'alerts'], ['samples', 'samples'], ['twin', 'twin-form'], ['run', 'scan-submit']]; // the run view last: its controls are checked next
+    for (const [width, height] of [[820, 1180], [1180, 820]]) {
+      await tablet(width, height);
+      for (const [view, ready] of views) {
+        await t.tap($(`nav-${view}`));
+        await t.waitForSelector(`${$(`nav-${view}`)}[aria-current="page"]`, { timeout: T });
+        await t.waitForSelector($(ready), { timeout: T });
+        assert.ok((await overflow()) <= 0, `the ${view} view is ${await overflow()} px wider than ${width}×${height}`);
+      }
+      for (const id of ['nav-run', 'nav-alerts', 'nav-samples', 'nav-twin', 'instrument-stop', 'scan-submit-button']) {
+        const r = await reachable($(id));
+        assert.ok(r.inside && r.onTop && r.w >= r.least && r.h >= r.least, `${id} at ${width}×${height}: ${JSON.stringify(r)}`);
+      }
+      await t.evaluate(() => scrollTo(0, 0));
+      await t.screenshot({ path: join(artifacts, `11-tablet-${width}x${height}.png`) }); // the tablet's screen
+    }
+
+    // A scan submitted and the instrument stopped by tapping.
+    await t.tap(`${$('scan-submit')} #f-name`);
+    await t.keyboard.type('tapped');
+    await t.tap($('scan-submit-button'));
+    await until('no scan submitted from the tablet', async () => (await g.call('scan.list', { limit: 20 })).some((x) => x.plan.name === 'tapped' && x.submitted_by === 'lab-tablet'));
+    await t.tap($('instrument-stop'));
+    await until('no instrument.stop from the tablet', async () => (await g.call('system.audit', { limit: 20 })).some((e) => e.action === 'instrument.stop' && e.actor === 'lab-tablet'));
+    await ctx.close();
+  });
+
   it('met no page errors and no CSP violations', async () => {
     assert.deepEqual(problems, []);
     // …and would have seen one: a style element the policy refuses.
