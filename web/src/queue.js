@@ -61,15 +61,22 @@ function ScanRow({ scan, index, last, role, call, notify, onSelect, selected }) 
   };
   const actions = can(role, 'control') ? scanActions(scan.state) : [];
   const pct = scan.points_total ? Math.round((100 * scan.points_done) / scan.points_total) : 0;
+  // null without a reason, not '': from an empty text node Preact would take the actions'
+  // span (the next unkeyed span) for the reason, and drop the buttons (and the focus) in it.
+  const reason = scan.reason ? html`<span class="muted reason">${scan.reason}</span>` : null;
+  // Pause and Resume take turns in one slot: the button, and the keyboard focus on it, stays
+  // when the scan's state flips.
+  const toggle = actions.includes('pause')
+    ? html`<button data-testid="scan-pause" onClick=${() => act('scan.pause', { scan: scan.id, reason: 'paused from the dashboard' })}>Pause</button>`
+    : actions.includes('resume') && html`<button data-testid="scan-resume" onClick=${() => act('scan.resume', { scan: scan.id })}>Resume</button>`;
   return html`<li class=${`scan state-${scan.state}${selected ? ' selected' : ''}`} data-testid=${`queue-item-${scan.id}`} data-state=${scan.state}>
     <button class="link" onClick=${() => onSelect(scan.id)} aria-label=${`show scan ${scan.id}`}>#${scan.id} ${scan.plan && scan.plan.name ? scan.plan.name : ''}</button>
     <span class="badge">${scan.state}</span>
     <progress max="100" value=${pct} aria-label="progress"></progress>
     <span class="muted">${scan.points_done}/${scan.points_total}${scan.points_diverged ? ` · ${scan.points_diverged} diverged` : ''}</span>
-    ${scan.reason && html`<span class="muted reason">${scan.reason}</span>`}
+    ${reason}
     <span class="actions">
-      ${actions.includes('pause') && html`<button data-testid="scan-pause" onClick=${() => act('scan.pause', { scan: scan.id, reason: 'paused from the dashboard' })}>Pause</button>`}
-      ${actions.includes('resume') && html`<button data-testid="scan-resume" onClick=${() => act('scan.resume', { scan: scan.id })}>Resume</button>`}
+      ${toggle}
       ${actions.includes('reorder') && html`<button aria-label="earlier" data-testid="queue-up" disabled=${index === 0} onClick=${() => act('queue.reorder', { scan: scan.id, position: index - 1 })}>↑</button>
         <button aria-label="later" data-testid="queue-down" disabled=${last} onClick=${() => act('queue.reorder', { scan: scan.id, position: index + 1 })}>↓</button>`}
       ${actions.includes('cancel') && html`<button class="danger" data-testid="scan-cancel" onClick=${() => act('scan.cancel', { scan: scan.id, reason: 'cancelled from the dashboard' })}>Cancel</button>`}
@@ -80,12 +87,13 @@ function ScanRow({ scan, index, last, role, call, notify, onSelect, selected }) 
 export function QueuePanel({ queue, role, call, notify, selected, onSelect }) {
   const waiting = (queue && queue.waiting) || [];
   const running = queue && queue.running ? [queue.running] : [];
+  // One keyed list: a scan that stops running and starts waiting keeps its row (and the focus).
+  const rows = [...running, ...waiting], r = running.length;
   return html`<section class="panel queue-panel" aria-labelledby="h-queue">
     <h2 id="h-queue">Queue</h2>
     <ul class="queue" data-testid="queue">
-      ${running.map((s) => html`<${ScanRow} key=${s.id} scan=${s} index=${0} last=${true} role=${role} call=${call} notify=${notify} onSelect=${onSelect} selected=${selected === s.id} />`)}
-      ${waiting.map((s, i) => html`<${ScanRow} key=${s.id} scan=${s} index=${i} last=${i === waiting.length - 1} role=${role} call=${call} notify=${notify} onSelect=${onSelect} selected=${selected === s.id} />`)}
-      ${running.length + waiting.length === 0 && html`<li class="muted">nothing running or waiting</li>`}
+      ${rows.map((s, i) => html`<${ScanRow} key=${s.id} scan=${s} index=${i < r ? 0 : i - r} last=${i < r || i === rows.length - 1} role=${role} call=${call} notify=${notify} onSelect=${onSelect} selected=${selected === s.id} />`)}
+      ${rows.length === 0 && html`<li class="muted">nothing running or waiting</li>`}
     </ul>
   </section>`;
 }

@@ -98,6 +98,13 @@ ${this.extra}`;
   }
 }
 
+// The browser the tests drive: GONIO_BROWSER=chromium (the default) or firefox.
+export function browserName() {
+  const name = process.env.GONIO_BROWSER || 'chromium';
+  if (name !== 'chromium' && name !== 'firefox') throw new Error(`GONIO_BROWSER=${name}: chromium or firefox`);
+  return name;
+}
+
 // The system's Chromium, headless; puppeteer-core drives it (no browser is downloaded).
 export function chromiumPath() {
   for (const p of [process.env.GONIO_CHROMIUM, '/usr/bin/chromium', '/usr/bin/chromium-browser'])
@@ -105,7 +112,29 @@ export function chromiumPath() {
   return null;
 }
 
+// The system's Firefox (Debian's firefox-esr), driven over WebDriver BiDi.
+export function firefoxPath() {
+  for (const p of [process.env.GONIO_FIREFOX, '/usr/bin/firefox-esr', '/usr/bin/firefox'])
+    if (p && existsSync(p)) return p;
+  return null;
+}
+
 export function launchArgs() {
   // --no-sandbox: CI runs as root, where Chromium's sandbox refuses to start.
   return ['--headless=new', '--no-sandbox', '--disable-gpu', '--disable-dev-shm-usage', '--no-first-run', '--window-size=1280,800'];
+}
+
+// Starts `name` headless with a home and a profile of its own in a temporary directory, so
+// that a run leaves nothing behind (Firefox writes ~/.config/mozilla, ~/.cache/mozilla and
+// ~/Downloads; Chromium ~/.config/chromium). close() ends it and removes the directory.
+export async function launchBrowser(puppeteer, name, executablePath) {
+  const home = mkdtempSync(join(tmpdir(), `gonio-${name}-`));
+  const common = { executablePath, headless: true, userDataDir: join(home, 'profile'), env: { ...process.env, HOME: home } };
+  try {
+    const browser = await puppeteer.launch(name === 'firefox' ? { ...common, browser: 'firefox' } : { ...common, args: launchArgs() });
+    return { browser, close: async () => { try { await browser.close(); } finally { rmSync(home, { recursive: true, force: true }); } } };
+  } catch (e) {
+    rmSync(home, { recursive: true, force: true });
+    throw e;
+  }
 }
