@@ -2,6 +2,7 @@
 #include <libpq-fe.h>
 
 #include <algorithm>
+#include <future>
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -154,16 +155,18 @@ int ArchiveShipper::migrate() {
 }
 
 void ArchiveShipper::disconnect() {
+  drop_ahead();
   if (pg_->conn) PQfinish(pg_->conn);
   pg_->conn = nullptr;
   std::lock_guard lock(mu_);
   connected_ = false;
 }
 
-std::size_t ArchiveShipper::ship_once() {
+ArchiveShipper::Prepared ArchiveShipper::prepare(std::int64_t after) const {
   ArchiveInput in;
-  in.rows = store_.outbox_batch(config_.batch);
-  if (in.rows.empty()) return 0;
+  in.rows = store_.outbox_batch(config_.batch, after);
+  Prepared p;
+  if (in.rows.empty()) return p;
   for (const auto& r : in.rows) {
     switch (r.kind) {
       case OutboxRow::Kind::sample:
@@ -184,24 +187,48 @@ std::size_t ArchiveShipper::ship_once() {
   for (const auto& [id, sc] : in.scans)
     if (!in.samples.contains(sc.plan.sample_id))
       if (auto s = store_.sample(sc.plan.sample_id)) in.samples.emplace(sc.plan.sample_id, std::move(*s));
+  p.first_seq = in.rows.front().seq;
+  p.last_seq = in.rows.back().seq;
+  p.rows = in.rows.size();
+  p.statements = build_archive_batch(instrument_, std::string(proto::kVersion), in);
+  return p;
+}
 
-  const auto statements = build_archive_batch(instrument_, std::string(proto::kVersion), in);
-  pg_->exec("BEGIN", {}, "begin");
+void ArchiveShipper::drop_ahead() noexcept {
+  if (!ahead_.valid()) return;
   try {
-    for (const auto& st : statements) pg_->exec(st.sql, st.params, "upsert");
+    ahead_.get();
+  } catch (...) {  // it is read again from the outbox
+  }
+}
+
+std::size_t ArchiveShipper::ship_once() {
+  // The next batch is read and built on another thread while this one is in PostgreSQL's
+  // hands: one after the other, the two took about as long. A batch read ahead that came
+  // back empty is read again (rows may have come since), and after any failure the outbox
+  // is read from its first row.
+  const bool was_ahead = ahead_.valid();
+  Prepared cur = was_ahead ? ahead_.get() : prepare(0);
+  if (cur.rows == 0 && was_ahead) cur = prepare(0);
+  if (cur.rows == 0) return 0;
+  ahead_ = std::async(std::launch::async, [this, after = cur.last_seq] { return prepare(after); });
+  try {
+    pg_->exec("BEGIN", {}, "begin");
+    for (const auto& st : cur.statements) pg_->exec(st.sql, st.params, "upsert");
     pg_->exec("COMMIT", {}, "commit");
   } catch (...) {
     PQclear(PQexec(pg_->conn, "ROLLBACK"));
+    drop_ahead();
     throw;
   }
   // Committed in the archive: now the rows may leave. A crash right here ships the batch
   // again, which the upserts make harmless.
-  store_.outbox_remove(in.rows.front().seq, in.rows.back().seq);
+  store_.outbox_remove(cur.first_seq, cur.last_seq);
   std::lock_guard lock(mu_);
-  shipped_ += in.rows.size();
+  shipped_ += cur.rows;
   ++batches_;
   last_shipped_at_ = utc::now();
-  return in.rows.size();
+  return cur.rows;
 }
 
 void ArchiveShipper::refresh_stats() {

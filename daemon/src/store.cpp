@@ -874,12 +874,13 @@ void Store::set_outbox_listener(std::function<void()> f) {
   outbox_listener_ = std::move(f);
 }
 
-std::vector<OutboxRow> Store::outbox_batch(std::size_t limit) const {
+std::vector<OutboxRow> Store::outbox_batch(std::size_t limit, std::int64_t after) const {
   auto c = read();
   Stmt s(*c, "SELECT o.seq, o.kind, o.ref, o.idx, o.at, o.detail, p.data FROM outbox o "
              "LEFT JOIN points p ON o.kind = 'point' AND p.scan_id = o.ref AND p.idx = o.idx "
-             "ORDER BY o.seq LIMIT ?");
-  s.bind(1, limit);
+             "WHERE o.seq > ? ORDER BY o.seq LIMIT ?");
+  s.bind(1, after);
+  s.bind(2, limit);
   std::vector<OutboxRow> out;
   out.reserve(std::min<std::size_t>(limit, 4096));
   while (s.step()) {

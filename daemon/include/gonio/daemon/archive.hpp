@@ -13,6 +13,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <future>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -89,6 +90,16 @@ class ArchiveShipper {
   bool connect();
   int migrate();  // creates or migrates the archive schema; returns its version
   void disconnect();
+  // One batch made ready to send: the outbox rows it covers and its statements.
+  struct Prepared {
+    std::int64_t first_seq = 0, last_seq = 0;
+    std::size_t rows = 0;
+    std::vector<SqlStatement> statements;
+  };
+  // Reads the batch after outbox seq `after` and builds its statements (no connection).
+  Prepared prepare(std::int64_t after) const;
+  // Waits for the batch being read ahead and forgets it.
+  void drop_ahead() noexcept;
   // Ships one batch; returns the rows shipped (0: outbox empty). Throws on failure.
   std::size_t ship_once();
   void refresh_stats();
@@ -107,6 +118,7 @@ class ArchiveShipper {
   bool stopping_ = false;
   std::atomic<bool> pending_{false};
   std::thread thread_;
+  std::future<Prepared> ahead_;  // the next batch, read while one is in flight (shipper thread)
 
   // status (under mu_)
   bool connected_ = false;

@@ -204,8 +204,9 @@ class Store {
   // Called after each transaction that wrote outbox rows, with the write lock held: it must
   // only wake someone, never call back into the store.
   void set_outbox_listener(std::function<void()> f);
-  // The oldest `limit` rows, in seq order, points with their stored JSON.
-  std::vector<OutboxRow> outbox_batch(std::size_t limit) const;
+  // The oldest `limit` rows after seq `after` (0: from the first), in seq order, points with
+  // their stored JSON.
+  std::vector<OutboxRow> outbox_batch(std::size_t limit, std::int64_t after = 0) const;
   // Removes rows first_seq..last_seq (what one batch shipped).
   void outbox_remove(std::int64_t first_seq, std::int64_t last_seq);
   OutboxStats outbox_stats() const;
