@@ -107,8 +107,12 @@ TEST_F(OutboxTest, EveryCommittedChangeIsQueuedInCommitOrderAndLeavesOnlyWhenRem
   EXPECT_EQ(s.outbox_stats().rows, 9);
   EXPECT_EQ(s.outbox_stats().oldest_at, rows.front().at);
 
-  // A batch of the first four leaves; the rest stay in order.
+  // The batch after the first four (what the shipper reads ahead) is the rest, in order.
   const auto first = s.outbox_batch(4);
+  const auto ahead = s.outbox_batch(3, first.back().seq);
+  ASSERT_EQ(ahead.size(), 3u);
+  for (std::size_t i = 0; i < ahead.size(); ++i) EXPECT_EQ(ahead[i].seq, rows[4 + i].seq);
+  // A batch of the first four leaves; the rest stay in order.
   s.outbox_remove(first.front().seq, first.back().seq);
   const auto rest = s.outbox_batch(100);
   ASSERT_EQ(rest.size(), 5u);
