@@ -5,7 +5,7 @@
 //   - what publishing adds to the runner per point (target ≤ 0.2 ms): the hub tap's call into
 //     the MQTT publisher, broker up and broker down;
 //   - a 1,000-point mock scan with the broker and the database configured but down, against
-//     the same scan with neither configured (target: the same speed).
+//     the same scan with both up (target: the same speed), and with neither configured.
 // Run: build/bench/bin/bench --benchmark_filter='Archive|Mqtt|MockScan'
 // (needs mosquitto and PostgreSQL 15 installed, as by .ci/bootstrap --test; the server
 // benchmarks are skipped without them).
@@ -158,18 +158,33 @@ BENCHMARK(BM_MqttPublishPerPoint)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond)
 
 // A 1,000-point scan of goniod --mock without motion time or predictions (so that the
 // runner and the store are all there is to measure), from running to completed as goniod
-// timed it.
+// timed it. Arg 0: neither MQTT nor the archive configured; 1: both configured and both
+// down (nothing listens there); 2: both configured and up. The target compares 1 with 2;
+// 0 shows what the outbox and the publishing cost a scan at all.
 void BM_MockScan1000(benchmark::State& state) {
-  const bool configured = state.range(0) != 0;
+  const auto mode = state.range(0);
+  const bool configured = mode != 0;
+  if (mode == 2 && !test::servers_installed()) {
+    state.SkipWithError("PostgreSQL 15 or mosquitto not installed");
+    return;
+  }
+  static int run = 0;
   for (auto _ : state) {
     test::TempDir dir;
+    std::unique_ptr<test::Broker> broker;
+    if (mode == 2) broker = std::make_unique<test::Broker>(dir.path / "mqtt");
     test::MockOptions o;
     o.tcp = o.http = false;
-    if (configured)  // both configured, both down: nothing listens there
+    const auto instrument = "bench-scan-" + std::to_string(::getpid()) + "-" + std::to_string(++run);
+    if (mode == 1)
       o.extra = "[mqtt]\nurl = \"mqtt://127.0.0.1:" + std::to_string(test::free_port()) +
                 "\"\ninstrument = \"bench\"\n\n[archive]\npostgres = \"host=" + dir.path.string() +
                 " port=" + std::to_string(test::free_port()) + " dbname=none connect_timeout=2\"\n"
                 "instrument = \"bench\"\n";
+    if (mode == 2)
+      o.extra = "[mqtt]\nurl = \"mqtt://127.0.0.1:" + std::to_string(broker->port()) +
+                "\"\ninstrument = \"" + instrument + "\"\n\n[archive]\npostgres = \"" +
+                postgres().conninfo() + "\"\ninstrument = \"" + instrument + "\"\n";
     test::Goniod g(dir.path / "state", test::mock_config(o));
     auto c = g.unix_conn();
     const auto id = test::submit(c, "tile", "", json{{"grids", {"in=45;out=-30:69:1"}}, {"repeats", 10}});
@@ -188,7 +203,7 @@ void BM_MockScan1000(benchmark::State& state) {
     if (configured) state.counters["archive_backlog"] = info["archive"]["backlog"].get<double>();
   }
 }
-BENCHMARK(BM_MockScan1000)->Arg(0)->Arg(1)->Iterations(2)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_MockScan1000)->Arg(0)->Arg(1)->Arg(2)->Iterations(2)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace gonio::daemon
