@@ -161,5 +161,43 @@ TEST(Archive, ReshipIsIdempotentAndAStaleBacklogRaisesAWarning) {
   EXPECT_EQ(pg.query("SELECT count(*) FROM alerts WHERE instrument = 'solo' AND kind = 'archive_backlog'"), "1\n");
 }
 
+// mqtts:// against a broker that requires TLS and a client certificate: goniod with the
+// lab's CA and its certificate publishes its retained state; one that trusts only the
+// system's CAs never connects.
+TEST(Archive, PublishesOverTlsWithTheLabsCaAndAClientCertificate) {
+  if (!servers_installed()) GTEST_SKIP() << "mosquitto or openssl not installed";
+  TempDir dir;
+  Broker broker(dir.path / "mqtt", true);
+  const auto f = broker.tls_files();
+  const auto url = "mqtts://127.0.0.1:" + std::to_string(broker.port());
+  MockOptions o;
+  o.tcp = o.http = false;
+  o.extra = "[mqtt]\nurl = \"" + url + "\"\ninstrument = \"tls\"\nca_file = \"" + f.ca.string() +
+            "\"\ncert_file = \"" + f.cert.string() + "\"\nkey_file = \"" + f.key.string() + "\"\n";
+  Goniod good(dir.path / "good", mock_config(o));
+  o.extra = "[mqtt]\nurl = \"" + url + "\"\ninstrument = \"untrusting\"\ncert_file = \"" +
+            f.cert.string() + "\"\nkey_file = \"" + f.key.string() + "\"\n";
+  Goniod untrusting(dir.path / "untrusting", mock_config(o));
+
+  auto c = good.unix_conn();
+  ASSERT_TRUE(eventually([&] { return c.call("system.info")["mqtt"]["connected"] == true; }, 20s))
+      << c.call("system.info")["mqtt"].dump() << broker.log();
+  const auto id = submit(c, "tile", kTrueSample, json{{"grids", {"in=45;out=-30:30:10"}}});
+  ASSERT_EQ(wait_state(c, id, {"completed"})["state"], "completed");
+  std::map<std::string, std::string> topics;
+  ASSERT_TRUE(eventually([&] {
+    topics = broker.retained("gonio/tls/#");
+    return topics.contains("gonio/tls/scan/" + std::to_string(id)) &&
+           topics["gonio/tls/scan/" + std::to_string(id)].find("completed") != std::string::npos;
+  }, 20s)) << broker.log();
+  EXPECT_TRUE(topics.contains("gonio/tls/state"));
+
+  // The broker's certificate is not signed by any CA the system trusts.
+  const auto info = untrusting.unix_conn().call("system.info")["mqtt"];
+  EXPECT_EQ(info["connected"], false) << info.dump();
+  EXPECT_EQ(info["connects"], 0) << info.dump();
+  EXPECT_TRUE(broker.retained("gonio/untrusting/#").empty());
+}
+
 }  // namespace
 }  // namespace gonio::test

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdio>
+#include <iterator>
 #include <map>
 
 #include "../daemon/harness.hpp"
@@ -99,11 +100,22 @@ class Postgres {
 // retained message, which goniod must publish again.
 class Broker {
  public:
-  explicit Broker(const fs::path& dir) : dir_(dir), port_(free_port()) {
+  // tls: a TLS listener with a CA made for the test (tls_files()), which requires clients to
+  // present a certificate signed by it.
+  explicit Broker(const fs::path& dir, bool tls = false) : dir_(dir), port_(free_port()), tls_(tls) {
     fs::create_directories(dir_);
     ::chmod(dir_.c_str(), 0755);
-    std::ofstream(dir_ / "mosquitto.conf") << "listener " << port_ << " 127.0.0.1\n"
-                                           << "allow_anonymous true\npersistence false\n";
+    std::ofstream conf(dir_ / "mosquitto.conf");
+    conf << "listener " << port_ << " 127.0.0.1\nallow_anonymous true\npersistence false\n";
+    if (tls_) {
+      make_certificates();
+      // As the test's own user: mosquitto started as root would read the files as its own
+      // unprivileged account, which cannot enter the test's private temporary directory.
+      conf << "user " << ::getpwuid(::geteuid())->pw_name << "\n";
+      conf << "cafile " << (dir_ / "ca.crt").string() << "\ncertfile " << (dir_ / "server.crt").string()
+           << "\nkeyfile " << (dir_ / "server.key").string() << "\nrequire_certificate true\n";
+    }
+    conf.close();
     start();
   }
   ~Broker() { kill(); }
@@ -133,10 +145,24 @@ class Broker {
     pid_ = -1;
   }
   int port() const { return port_; }
+  // The CA, and a client certificate and key it signed (TLS brokers only).
+  struct TlsFiles {
+    fs::path ca, cert, key;
+  };
+  TlsFiles tls_files() const { return {dir_ / "ca.crt", dir_ / "client.crt", dir_ / "client.key"}; }
+  std::string log() const {
+    std::ifstream in(dir_ / "mosquitto.log");
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  }
   // Every retained message under `filter`: topic → payload.
   std::map<std::string, std::string> retained(const std::string& filter) const {
-    const auto [rc, out] = run("mosquitto_sub -h 127.0.0.1 -p " + std::to_string(port_) + " -t '" + filter +
-                               "' --retained-only -v -W 2 2>/dev/null");
+    std::string tls;
+    if (tls_) {
+      const auto f = tls_files();
+      tls = " --cafile '" + f.ca.string() + "' --cert '" + f.cert.string() + "' --key '" + f.key.string() + "'";
+    }
+    const auto [rc, out] = run("mosquitto_sub -h 127.0.0.1 -p " + std::to_string(port_) + tls + " -t '" +
+                               filter + "' --retained-only -v -W 2 2>/dev/null");
     std::map<std::string, std::string> m;
     std::istringstream in(out);
     for (std::string line; std::getline(in, line);) {
@@ -147,13 +173,32 @@ class Broker {
   }
 
  private:
+  // A CA, and a server (for 127.0.0.1) and a client certificate signed by it: EC keys, valid
+  // for a day.
+  void make_certificates() const {
+    const auto d = "'" + dir_.string() + "'";
+    std::ofstream(dir_ / "server.ext") << "subjectAltName = IP:127.0.0.1, DNS:127.0.0.1, DNS:localhost\n";
+    const std::string key = "-newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes";
+    const std::string cmd =
+        "cd " + d + " && openssl req -x509 " + key + " -keyout ca.key -out ca.crt -days 1 -subj '/CN=gonio test CA'"
+        " && openssl req " + key + " -keyout server.key -out server.csr -subj '/CN=127.0.0.1'"
+        " && openssl x509 -req -in server.csr -CA ca.crt -CAkey ca.key -CAcreateserial -out server.crt -days 1 -extfile server.ext"
+        " && openssl req " + key + " -keyout client.key -out client.csr -subj '/CN=goniod'"
+        " && openssl x509 -req -in client.csr -CA ca.crt -CAkey ca.key -CAcreateserial -out client.crt -days 1";
+    const auto [rc, out] = run(cmd + " 2>&1");
+    if (rc != 0) throw std::runtime_error("openssl: " + out);
+  }
+
+ private:
   fs::path dir_;
   int port_;
+  bool tls_ = false;
   pid_t pid_ = -1;
 };
 
 inline bool servers_installed() {
-  return fs::exists(kPgBin + "/initdb") && run("command -v mosquitto mosquitto_sub psql > /dev/null").first == 0;
+  return fs::exists(kPgBin + "/initdb") &&
+         run("command -v mosquitto mosquitto_sub psql openssl > /dev/null").first == 0;
 }
 
 }  // namespace gonio::test
