@@ -23,10 +23,22 @@ namespace {
 // that the three fits take seconds.
 constexpr std::size_t kMaxPoints = 200;
 
+// A one-parameter fit has no flat direction to detect: a parameter the points do not
+// constrain shows as an uncertainty wider than the range it may take.
+bool determined(const twin::FittedParameter& p) { return std::isfinite(p.u) && p.u < p.hi - p.lo; }
+
 bool usable(const twin::FitResult& f) {
   if (!f.converged || f.parameters.size() != 1 || !f.degenerate.empty()) return false;
   const auto& p = f.parameters.front();
-  return !p.at_bound && p.identifiable && std::isfinite(p.value) && std::isfinite(f.chi2_per_dof);
+  return !p.at_bound && p.identifiable && determined(p) && std::isfinite(p.value) &&
+         std::isfinite(f.chi2_per_dof);
+}
+
+// A converged fit that ended on its bound: the divergence may be larger than the range the
+// diagnosis fits (a gain of 2 for a sample twice as bright as its reference).
+bool on_bound(const twin::FitResult& f) {
+  return f.converged && f.parameters.size() == 1 && f.parameters.front().at_bound &&
+         std::isfinite(f.chi2_per_dof);
 }
 
 // "a receive-arm offset of −0.212 ± 0.020°"
@@ -67,21 +79,40 @@ std::optional<double> chi2_per_dof(const std::vector<PointRecord>& points) {
 
 Verdict explain(double before, const std::vector<twin::FitResult>& candidates) {
   Verdict v;
+  std::optional<std::size_t> bound;  // the best fit that ended on its bound
   for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const auto c = candidates[i].chi2_per_dof;
+    if (on_bound(candidates[i]) && (!bound || c < candidates[*bound].chi2_per_dof)) bound = i;
     if (!usable(candidates[i])) continue;
-    if (!v.best || candidates[i].chi2_per_dof < candidates[*v.best].chi2_per_dof) v.best = i;
+    if (!v.best || c < candidates[*v.best].chi2_per_dof) v.best = i;
+  }
+  // Said when a fit on its bound does better than any usable one: the likeliest cause lies
+  // beyond the range fitted, which the technician should know rather than a poorer answer.
+  std::string beyond;
+  if (bound && (!v.best || candidates[*bound].chi2_per_dof < candidates[*v.best].chi2_per_dof)) {
+    const auto& p = candidates[*bound].parameters.front();
+    beyond = fmt::format("; {} at the end of its range ({:g}) fits best (χ²/dof {:.3g} → {:.3g}): "
+                         "the difference may lie beyond what the diagnosis fits",
+                         p.name == "gain" ? "a reference-white gain"
+                         : p.name == "incidence_offset_deg" ? "an incidence-arm offset"
+                                                            : "a receive-arm offset",
+                         p.value, before, candidates[*bound].chi2_per_dof);
   }
   if (!v.best) {
-    v.text = "diagnosis: no arm offset or gain could be fitted to the scan's points; the sample "
-             "may differ from its reference BSDF";
+    v.text = "diagnosis: no arm offset or gain could be fitted to the scan's points" + beyond +
+             "; the sample may differ from its reference BSDF";
     return v;
   }
   const auto& best = candidates[*v.best];
   v.explained = best.chi2_per_dof <= kExplainedChi2 && best.chi2_per_dof <= 0.25 * before;
   if (!v.explained) {
-    v.text = fmt::format("diagnosis: no single arm offset or gain explains it (best: {}, χ²/dof "
-                         "{:.3g} → {:.3g}); the sample may differ from its reference BSDF",
-                         describe(best), before, best.chi2_per_dof);
+    if (!beyond.empty())
+      v.text = "diagnosis: no single arm offset or gain within the fitted ranges explains it" + beyond +
+               "; the sample may differ from its reference BSDF";
+    else
+      v.text = fmt::format("diagnosis: no single arm offset or gain explains it (best: {}, χ²/dof "
+                           "{:.3g} → {:.3g}); the sample may differ from its reference BSDF",
+                           describe(best), before, best.chi2_per_dof);
     return v;
   }
   // Others as good (within 50 % of the best χ²/dof and explaining too): the data cannot tell

@@ -17,6 +17,7 @@ twin::FitResult candidate(const std::string& name, double value, double u, doubl
   p.name = name;
   p.value = value;
   p.u = u;
+  p.lo = value - 10, p.hi = value + 10;
   f.parameters.push_back(p);
   return f;
 }
@@ -86,6 +87,30 @@ TEST(Explain, UnusableFitsAreNeverTheAnswer) {
   EXPECT_FALSE(v.explained);
   EXPECT_FALSE(v.best.has_value());
   EXPECT_NE(v.text.find("could be fitted"), std::string::npos) << v.text;
+}
+
+TEST(Explain, AFitThatDidNotConstrainItsParameterIsNoAnswer) {
+  // A one-parameter fit that stayed where it started, its uncertainty wider than its range.
+  auto loose = candidate("receive_offset_deg", 0.0, 9.7e11, 3700);
+  loose.parameters[0].lo = -5, loose.parameters[0].hi = 5;
+  const auto v = explain(3700, {loose});
+  EXPECT_FALSE(v.best.has_value());
+  EXPECT_EQ(v.text.find("receive-arm offset of"), std::string::npos) << v.text;
+}
+
+TEST(Explain, SaysWhenTheBestFitIsAtTheEndOfItsRange) {
+  // A sample twice as bright as its reference: the gain runs to its bound of 2 and fits
+  // better than anything else, which the verdict must not hide behind a poorer candidate.
+  auto gain = candidate("gain", 2.0, 0.001, 1.1);
+  gain.parameters[0].at_bound = true;
+  const auto v = explain(3700, {candidate("receive_offset_deg", 0.01, 0.02, 3600), gain});
+  EXPECT_FALSE(v.explained);
+  EXPECT_NE(v.text.find("reference-white gain at the end of its range (2)"), std::string::npos) << v.text;
+  EXPECT_EQ(v.text.find("best: a receive-arm offset"), std::string::npos) << v.text;
+  // A usable candidate that explains it still wins.
+  const auto w = explain(3700, {candidate("receive_offset_deg", 0.2, 0.02, 1.2), gain});
+  EXPECT_TRUE(w.explained);
+  EXPECT_NE(w.text.find("consistent with a receive-arm offset"), std::string::npos) << w.text;
 }
 
 }  // namespace

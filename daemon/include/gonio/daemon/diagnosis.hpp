@@ -42,8 +42,9 @@ struct Verdict {
 };
 
 // A candidate explains the divergence when its fit is usable (converged, off its bounds,
-// identifiable), brings χ²/dof to at most kExplainedChi2 and to at most a quarter of
-// `before`. `candidates[i]` fitted diagnosis_parameters()[i] alone.
+// identifiable, with an uncertainty narrower than its range), brings χ²/dof to at most
+// kExplainedChi2 and to at most a quarter of `before`. A fit on its bound never explains, but
+// when it fits best the text says so. `candidates[i]` fitted diagnosis_parameters()[i] alone.
 inline constexpr double kExplainedChi2 = 2.0;
 Verdict explain(double before, const std::vector<twin::FitResult>& candidates);
 
