@@ -41,12 +41,17 @@ bool on_bound(const twin::FitResult& f) {
          std::isfinite(f.chi2_per_dof);
 }
 
+// What a diagnosis parameter is, in the alert's words.
+const char* subject(const std::string& name) {
+  if (name == "gain") return "a reference-white gain";
+  return name == "incidence_offset_deg" ? "an incidence-arm offset" : "a receive-arm offset";
+}
+
 // "a receive-arm offset of −0.212 ± 0.020°"
 std::string describe(const twin::FitResult& f) {
   const auto& p = f.parameters.front();
-  if (p.name == "gain") return fmt::format("a reference-white gain of {:.4f} ± {:.4f}", p.value, p.u);
-  const char* arm = p.name == "incidence_offset_deg" ? "an incidence-arm" : "a receive-arm";
-  return fmt::format("{} offset of {:+.3f} ± {:.3f}°", arm, p.value, p.u);
+  if (p.name == "gain") return fmt::format("{} of {:.4f} ± {:.4f}", subject(p.name), p.value, p.u);
+  return fmt::format("{} of {:+.3f} ± {:.3f}°", subject(p.name), p.value, p.u);
 }
 
 }  // namespace
@@ -93,10 +98,7 @@ Verdict explain(double before, const std::vector<twin::FitResult>& candidates) {
     const auto& p = candidates[*bound].parameters.front();
     beyond = fmt::format("; {} at the end of its range ({:g}) fits best (χ²/dof {:.3g} → {:.3g}): "
                          "the difference may lie beyond what the diagnosis fits",
-                         p.name == "gain" ? "a reference-white gain"
-                         : p.name == "incidence_offset_deg" ? "an incidence-arm offset"
-                                                            : "a receive-arm offset",
-                         p.value, before, candidates[*bound].chi2_per_dof);
+                         subject(p.name), p.value, before, candidates[*bound].chi2_per_dof);
   }
   if (!v.best) {
     v.text = "diagnosis: no arm offset or gain could be fitted to the scan's points" + beyond +
