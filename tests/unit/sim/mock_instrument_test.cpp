@@ -1,5 +1,6 @@
 // The mock instrument: readings follow the twin, runs repeat for a seed, the two sides
 // share one lab, and every scripted fault arrives as its typed error.
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -93,6 +94,47 @@ TEST(MockInstrument, LampDriftShowsBetweenReferenceReadings) {
   for (int i = 0; i < 10; ++i) m.photometer->measure(Channel::dark, 1s);
   const double r2 = m.photometer->measure(Channel::reference, 1s).spectrum.values[0];
   EXPECT_GT(r2 / r1, 1.005);  // ~1.1 virtual s later: +1.1 %
+}
+
+TEST(MockInstrument, PositionRepeatabilityMovesTheLightNotTheEncoder) {
+  // On the steep flank of a glossy lobe, β changes by tens of percent per degree: landing
+  // errors of up to ±0.5° spread repeated readings far beyond the detector's noise, while
+  // the arm still reads back at its target.
+  const auto spread = [](double repeatability) {
+    auto cfg = base_config();
+    cfg["sample"] = "conductor:alpha=0.05,eta=0.2,k=3.9";
+    cfg["read_noise_counts"] = 0;
+    cfg["gain_counts_per_ms"] = 1e5;
+    cfg["full_scale_counts"] = 1e15;
+    cfg["position_repeatability_deg"] = repeatability;
+    auto m = mock::make_mock(cfg);
+    m.motion->move(Axis::incidence, 45, 1s);
+    double lo = 1e300, hi = 0;
+    for (int i = 0; i < 12; ++i) {
+      m.motion->move(Axis::receive, 20, 1s);
+      m.motion->move(Axis::receive, 52, 1s);
+      EXPECT_DOUBLE_EQ(m.motion->position(Axis::receive, 1s), 52);
+      const double b = beta(*m.photometer)[1];
+      lo = std::min(lo, b);
+      hi = std::max(hi, b);
+    }
+    return (hi - lo) / lo;
+  };
+  const double still = spread(0), loose = spread(0.5);
+  EXPECT_LT(still, 0.05);
+  EXPECT_GT(loose, 3 * still);
+  EXPECT_GT(loose, 0.1);
+}
+
+TEST(MockInstrument, PositionRepeatabilityIsRangeChecked) {
+  auto cfg = base_config();
+  cfg["position_repeatability_deg"] = 9;
+  try {
+    mock::make_mock(cfg);
+    FAIL() << "accepted 9°";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "mock.position_repeatability_deg");
+  }
 }
 
 TEST(MockInstrument, ScriptedFaultsAreTypedErrors) {

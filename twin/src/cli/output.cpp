@@ -74,4 +74,35 @@ void write_predictions_table(std::ostream& out, const std::vector<Prediction>& p
   }
 }
 
+void write_budget_table(std::ostream& out, const std::vector<Prediction>& ps,
+                        const std::vector<Budget>& budgets) {
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    const auto& p = ps[i];
+    const auto& b = budgets[i];
+    std::size_t k = 0;
+    for (std::size_t c = 1; c < p.beta.size(); ++c)
+      if (p.beta[c] > p.beta[k]) k = c;
+    const double beta = p.beta[k];
+    const auto rel = [&](double u) { return beta != 0 ? 100 * u / std::abs(beta) : 0.0; };
+    fmt::print(out, "{}  at {:g} nm: β = {:.6g}\n", p.geometry.to_string(), p.wavelengths[k], beta);
+    fmt::print(out, "  {:<24} {:<12} {:>11} {:>6} {:>13} {:>12} {:>8}  {}\n", "input quantity",
+               "distribution", "u(x)", "unit", "c = ∂β/∂x", "u_x(β)", "rel", "");
+    for (const auto& c : b.components) {
+      const char* dist = c.distribution == Distribution::rectangular  ? "rectangular"
+                         : c.distribution == Distribution::triangular ? "triangular"
+                                                                      : "normal";
+      fmt::print(out, "  {:<24} {:<12} {:>11.4g} {:>6} {:>13.4g} {:>12.4g} {:>7.3f}%  {}\n", c.name,
+                 dist, c.u[k], c.unit, c.sensitivity[k], c.contribution[k], rel(c.contribution[k]),
+                 c.random ? "random" : "systematic");
+    }
+    const double se = p.std_error[k], um = b.u_model[k];
+    const double uc = std::hypot(se, um);
+    fmt::print(out, "  {:<24} {:<12} {:>11} {:>6} {:>13} {:>12.4g} {:>7.3f}%\n", "twin (Monte Carlo)",
+               "normal", "", "", "", se, rel(se));
+    fmt::print(out, "  {:<24} {:>59.4g} {:>7.3f}%\n", "u_model", um, rel(um));
+    fmt::print(out, "  {:<24} {:>59.4g} {:>7.3f}%\n", "u_c (combined)", uc, rel(uc));
+    fmt::print(out, "  {:<24} {:>59.4g} {:>7.3f}%\n\n", "U (k = 2)", 2 * uc, rel(2 * uc));
+  }
+}
+
 }  // namespace gonio::twin::cli

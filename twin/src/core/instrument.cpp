@@ -11,6 +11,7 @@
 // are not in the paper: 100 × 100 mm, large enough for the viewed area up to θr ≈ 85°.
 // Nor is the arms' clearance: 10° (instrument.hpp says why), so that no profile lets the
 // two arms meet (θi = 45°, θr = −44° puts them 1° apart).
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -73,7 +74,132 @@ void check(double v, const std::string& field, double lo, double hi, std::string
   if (!(v >= lo && v <= hi)) throw Error::out_of_range(field, v, lo, hi, unit);
 }
 
+const char* distribution_name(Distribution d) {
+  switch (d) {
+    case Distribution::rectangular: return "rectangular";
+    case Distribution::triangular: return "triangular";
+    case Distribution::normal: return "normal";
+  }
+  return "normal";
+}
+
+nlohmann::json tolerance_json(const Tolerance& t) {
+  nlohmann::json j{{"distribution", distribution_name(t.distribution)}};
+  if (t.distribution != Distribution::normal) {
+    j["half_width"] = t.half_width;
+  } else if (!t.spectral.empty()) {
+    auto nodes = nlohmann::json::array();
+    for (const auto& [nm, u] : t.spectral) nodes.push_back({nm, u});
+    j["u"] = std::move(nodes);
+  } else {
+    j["u"] = t.u;
+  }
+  return j;
+}
+
+// {"distribution": "rectangular", "half_width": 0.5} | {"distribution": "normal", "u": 0.002}
+// | {"distribution": "normal", "u": [[400, 0.005], [700, 0.003]]}. The distribution is
+// required: a bare number could be a half-width or a standard uncertainty.
+Tolerance read_tolerance(const nlohmann::json& j, const std::string& field, double hi) {
+  ObjectReader r(j, field);
+  if (!r.has("distribution"))
+    throw Error::invalid(r.path("distribution"),
+                         "is required (rectangular, triangular or normal): a tolerance without "
+                         "its distribution has no standard uncertainty");
+  Tolerance t;
+  const auto d = r.required<std::string>("distribution");
+  if (d == "rectangular")
+    t.distribution = Distribution::rectangular;
+  else if (d == "triangular")
+    t.distribution = Distribution::triangular;
+  else if (d == "normal")
+    t.distribution = Distribution::normal;
+  else
+    throw Error::invalid(r.path("distribution"),
+                         fmt::format("'{}' (allowed: rectangular, triangular, normal)", d));
+  if (t.distribution != Distribution::normal) {
+    if (r.has("u"))
+      throw Error::invalid(r.path("u"), fmt::format("a {} tolerance is stated as half_width", d));
+    t.half_width = r.required_in<double>("half_width", 0.0, hi);
+  } else {
+    if (r.has("half_width"))
+      throw Error::invalid(r.path("half_width"),
+                           "a normal tolerance is stated as its standard uncertainty u");
+    const auto* u = r.raw("u");
+    if (!u) throw Error::invalid(r.path("u"), "is required for a normal tolerance");
+    if (u->is_array()) {
+      double last = 0;
+      for (std::size_t i = 0; i < u->size(); ++i) {
+        const auto f = fmt::format("{}[{}]", r.path("u"), i);
+        const auto& node = (*u)[i];
+        if (!node.is_array() || node.size() != 2) throw Error::invalid(f, "expected [nm, u]");
+        const auto nm = json_util::get_as<double>(node[0], f + "[0]");
+        const auto v = json_util::get_as<double>(node[1], f + "[1]");
+        if (!(nm >= 200 && nm <= 2500)) throw Error::out_of_range(f + "[0]", nm, 200, 2500, " nm");
+        if (i > 0 && !(nm > last)) throw Error::invalid(f + "[0]", "wavelengths must increase");
+        if (!(v >= 0 && v <= hi)) throw Error::out_of_range(f + "[1]", v, 0, hi);
+        last = nm;
+        t.spectral.emplace_back(nm, v);
+      }
+      if (t.spectral.empty()) throw Error::invalid(r.path("u"), "has no [nm, u] node");
+    } else {
+      t.u = json_util::get_as<double>(*u, r.path("u"));
+      if (!(t.u >= 0 && t.u <= hi)) throw Error::out_of_range(r.path("u"), t.u, 0, hi);
+    }
+  }
+  r.finish();
+  return t;
+}
+
+// Tolerance keys: name, the largest value that makes sense, whether it may be spectral.
+struct ToleranceKey {
+  const char* name;
+  double hi;
+};
+constexpr ToleranceKey kToleranceKeys[] = {
+    {"incidence_arm_deg", 10},     {"receive_arm_deg", 10},     {"arm_repeatability_deg", 10},
+    {"source_aperture_rel", 0.5},  {"receiver_aperture_rel", 0.5}, {"reference_white_rel", 0.2},
+    {"lamp_stability_rel", 0.2},
+};
+
 }  // namespace
+
+double Tolerance::standard_uncertainty(double wavelength_nm) const {
+  switch (distribution) {
+    case Distribution::rectangular: return half_width / std::sqrt(3.0);
+    case Distribution::triangular: return half_width / std::sqrt(6.0);
+    case Distribution::normal: break;
+  }
+  if (spectral.empty()) return u;
+  if (wavelength_nm <= spectral.front().first) return spectral.front().second;
+  if (wavelength_nm >= spectral.back().first) return spectral.back().second;
+  for (std::size_t i = 1; i < spectral.size(); ++i) {
+    const auto& [x1, y1] = spectral[i];
+    if (wavelength_nm > x1) continue;
+    const auto& [x0, y0] = spectral[i - 1];
+    return y0 + (y1 - y0) * (wavelength_nm - x0) / (x1 - x0);
+  }
+  return spectral.back().second;
+}
+
+double Tolerance::kurtosis() const {
+  switch (distribution) {
+    case Distribution::rectangular: return 9.0 / 5.0;
+    case Distribution::triangular: return 12.0 / 5.0;
+    case Distribution::normal: return 3.0;
+  }
+  return 3.0;
+}
+
+Tolerance InstrumentProfile::incidence_arm_tolerance() const {
+  return tolerances.incidence_arm_deg.value_or(
+      Tolerance{Distribution::rectangular, arms.accuracy_deg, 0, {}});
+}
+
+Tolerance InstrumentProfile::receive_arm_tolerance() const {
+  return tolerances.receive_arm_deg.value_or(
+      Tolerance{Distribution::rectangular, arms.accuracy_deg, 0, {}});
+}
 
 InstrumentProfile InstrumentProfile::preset(std::string_view name) {
   if (name == "gcms4") return InstrumentProfile{};
@@ -147,7 +273,18 @@ void to_json(nlohmann::json& j, const InstrumentProfile& p) {
        {{"mode", mode_name(p.calibration.mode)},
         {"geometry", p.calibration.geometry},
         {"correction", correction_name(p.calibration.correction)}}},
+      {"tolerances",
+       {{"arm_repeatability_deg", tolerance_json(p.tolerances.arm_repeatability_deg)},
+        {"source_aperture_rel", tolerance_json(p.tolerances.source_aperture_rel)},
+        {"receiver_aperture_rel", tolerance_json(p.tolerances.receiver_aperture_rel)},
+        {"reference_white_rel", tolerance_json(p.tolerances.reference_white_rel)},
+        {"lamp_stability_rel", tolerance_json(p.tolerances.lamp_stability_rel)}}},
   };
+  // The arms' own only when stated: otherwise they follow arms.accuracy_deg.
+  if (p.tolerances.incidence_arm_deg)
+    j["tolerances"]["incidence_arm_deg"] = tolerance_json(*p.tolerances.incidence_arm_deg);
+  if (p.tolerances.receive_arm_deg)
+    j["tolerances"]["receive_arm_deg"] = tolerance_json(*p.tolerances.receive_arm_deg);
 }
 
 void from_json(const nlohmann::json& j, InstrumentProfile& p) {
@@ -212,6 +349,33 @@ void from_json(const nlohmann::json& j, InstrumentProfile& p) {
       throw Error::invalid(rc.path("correction"),
                            fmt::format("'{}' (allowed: cos-receive, cos-incidence, none)", corr));
     rc.finish();
+  }
+  if (const auto* s = r.raw("tolerances")) {
+    ObjectReader rt(*s, "profile.tolerances");
+    auto& t = p.tolerances;
+    const auto read = [&](const ToleranceKey& k) -> std::optional<Tolerance> {
+      const auto* node = rt.raw(k.name);
+      if (!node) return std::nullopt;
+      return read_tolerance(*node, rt.path(k.name), k.hi);
+    };
+    t.incidence_arm_deg = read(kToleranceKeys[0]);
+    t.receive_arm_deg = read(kToleranceKeys[1]);
+    Tolerance* fields[] = {&t.arm_repeatability_deg, &t.source_aperture_rel, &t.receiver_aperture_rel,
+                           &t.reference_white_rel, &t.lamp_stability_rel};
+    for (std::size_t i = 0; i < std::size(fields); ++i) {
+      const auto& key = kToleranceKeys[i + 2];
+      auto v = read(key);
+      if (!v) continue;
+      if (!v->spectral.empty() && std::string_view(key.name) != "reference_white_rel")
+        throw Error::invalid(rt.path(key.name) + ".u",
+                             "only reference_white_rel may vary with wavelength");
+      *fields[i] = std::move(*v);
+    }
+    for (const auto* arm : {&t.incidence_arm_deg, &t.receive_arm_deg})
+      if (*arm && !(*arm)->spectral.empty())
+        throw Error::invalid(rt.path(arm == &t.incidence_arm_deg ? "incidence_arm_deg" : "receive_arm_deg") + ".u",
+                             "only reference_white_rel may vary with wavelength");
+    rt.finish();
   }
   r.finish();
   p.validate();

@@ -103,6 +103,10 @@ Twin::Twin(InstrumentProfile profile, BsdfPtr sample, BsdfPtr reference, Wavelen
     throw Error::invalid("profile.reference_bsdf", "built for another wavelength grid");
 }
 
+Twin Twin::with_profile(InstrumentProfile profile) const {
+  return Twin(std::move(profile), sample_, reference_, grid_);
+}
+
 std::vector<double> Twin::true_beta(const Geometry& g) const {
   const auto a = g.incident_direction();
   const auto b = g.receiving_direction();

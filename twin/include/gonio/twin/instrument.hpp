@@ -18,8 +18,11 @@
 //             fixed: read once at `geometry` and carried to others by `correction`.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json_fwd.hpp>
 
@@ -38,6 +41,43 @@ struct Extent {
   double in_plane = 0;       // along the plane of measurement
   double perpendicular = 0;  // across it
   friend bool operator==(const Extent&, const Extent&) = default;
+};
+
+// How a stated tolerance is distributed (GUM, JCGM 100:2008 §4.3.7–4.3.9): a data sheet's
+// "±a" is rectangular unless it says otherwise; a calibration certificate's u is normal.
+enum class Distribution { rectangular, triangular, normal };
+
+// One stated tolerance: ±half_width (rectangular, triangular) or a standard uncertainty u
+// (normal, k = 1). `spectral` (normal only) gives u per wavelength instead, as nm:u nodes
+// interpolated linearly and held constant beyond the first and last.
+struct Tolerance {
+  Distribution distribution = Distribution::rectangular;
+  double half_width = 0;
+  double u = 0;
+  std::vector<std::pair<double, double>> spectral;
+  // The standard uncertainty: a/√3 (rectangular), a/√6 (triangular), u (normal); at
+  // `wavelength_nm` for a spectral one.
+  double standard_uncertainty(double wavelength_nm = 0) const;
+  // E[x⁴]/u⁴ of the distribution (9/5, 12/5, 3): the second-order term of the budget.
+  double kurtosis() const;
+  friend bool operator==(const Tolerance&, const Tolerance&) = default;
+};
+
+// The instrument's stated tolerances, the inputs of the twin's uncertainty budget
+// (twin/include/gonio/twin/budget.hpp). Arm accuracies default to ±arms.accuracy_deg. The
+// others are not in the GCMS-4 paper; the defaults are typical of the class of instrument and
+// a site states its own: apertures ±3 % of their angle, a white standard certified to
+// u = 0.5 % at 400 nm and 0.3 % from 500 nm on (Spectralon-class certificates), the lamp stable to 0.1 % between
+// the white's reading and the sample's, and the arms repeatable to ±0.05° per move.
+struct Tolerances {
+  std::optional<Tolerance> incidence_arm_deg;  // unset: rectangular ±arms.accuracy_deg
+  std::optional<Tolerance> receive_arm_deg;    // unset: rectangular ±arms.accuracy_deg
+  Tolerance arm_repeatability_deg{Distribution::rectangular, 0.05, 0, {}};
+  Tolerance source_aperture_rel{Distribution::rectangular, 0.03, 0, {}};
+  Tolerance receiver_aperture_rel{Distribution::rectangular, 0.03, 0, {}};
+  Tolerance reference_white_rel{Distribution::normal, 0, 0, {{400, 0.005}, {500, 0.003}}};
+  Tolerance lamp_stability_rel{Distribution::normal, 0, 0.001, {}};
+  friend bool operator==(const Tolerances&, const Tolerances&) = default;
 };
 
 struct InstrumentProfile {
@@ -79,6 +119,11 @@ struct InstrumentProfile {
     GeometricCorrection correction = GeometricCorrection::cos_receive;
     friend bool operator==(const Calibration&, const Calibration&) = default;
   } calibration;
+  Tolerances tolerances;
+
+  // The arms' stated accuracy as a tolerance (the tolerances' own, else ±arms.accuracy_deg).
+  Tolerance incidence_arm_tolerance() const;
+  Tolerance receive_arm_tolerance() const;
 
   // Built-in presets by name ("gcms4"); throws Error(not_found) listing the names.
   static InstrumentProfile preset(std::string_view name);

@@ -66,6 +66,9 @@ class Twin {
   const WavelengthGrid& wavelengths() const noexcept { return grid_; }
   const Bsdf& sample() const noexcept { return *sample_; }
 
+  // The same sample and reference with another profile (a calibration's, a tolerance's).
+  Twin with_profile(InstrumentProfile profile) const;
+
   // Thread-safe; deterministic for options.seed and the geometry.
   Prediction predict(const Geometry& g, const EstimatorOptions& options = {}) const;
   // Spreads geometries over `threads` workers (0: hardware concurrency). Results are in
