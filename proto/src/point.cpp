@@ -1,12 +1,87 @@
 // PointRecord JSON (see point.hpp).
 #include "gonio/proto/point.hpp"
 
+#include <algorithm>
+
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/json_util.hpp"
 
 namespace gonio {
+
+namespace {
+
+// One value for every channel is written as a number.
+nlohmann::json compact(const std::vector<double>& v) {
+  if (!v.empty() && std::all_of(v.begin(), v.end(), [&](double x) { return x == v.front(); }))
+    return v.front();
+  return v;
+}
+
+std::vector<double> read_vector(const nlohmann::json& j, const std::string& field) {
+  if (j.is_number()) return {json_util::get_as<double>(j, field)};
+  return json_util::get_as<std::vector<double>>(j, field);
+}
+
+}  // namespace
+
+void to_json(nlohmann::json& j, const BudgetEntry& b) {
+  j = nlohmann::json{{"component", b.component},       {"distribution", b.distribution},
+                     {"unit", b.unit},                 {"random", b.random},
+                     {"u", compact(b.u)},              {"sensitivity", b.sensitivity},
+                     {"contribution", b.contribution}};
+  if (!b.curvature.empty()) j["curvature"] = b.curvature;
+}
+
+void from_json(const nlohmann::json& j, BudgetEntry& b) {
+  json_util::ObjectReader r(j, "budget[]");
+  b.component = r.required<std::string>("component");
+  b.distribution = r.required<std::string>("distribution");
+  b.unit = r.optional<std::string>("unit", "");
+  b.random = r.optional<bool>("random", false);
+  const auto* u = r.raw("u");
+  if (!u) throw Error::invalid(r.path("u"), "is required");
+  b.u = read_vector(*u, r.path("u"));
+  b.sensitivity = r.required<std::vector<double>>("sensitivity");
+  b.contribution = r.required<std::vector<double>>("contribution");
+  b.curvature = r.optional<std::vector<double>>("curvature", {});
+  r.finish();
+}
+
+void to_json(nlohmann::json& j, const SampleSensitivity& s) {
+  j = nlohmann::json{{"parameter", s.parameter}, {"value", s.value}, {"sensitivity", s.sensitivity}};
+}
+
+void from_json(const nlohmann::json& j, SampleSensitivity& s) {
+  json_util::ObjectReader r(j, "sample_sensitivity[]");
+  s.parameter = r.required<std::string>("parameter");
+  s.value = r.required<double>("value");
+  s.sensitivity = r.required<std::vector<double>>("sensitivity");
+  r.finish();
+}
+
+void to_json(nlohmann::json& j, const ColourCheck& c) {
+  j = nlohmann::json{{"kind", c.kind},   {"difference", c.difference}, {"u", c.u},
+                     {"limit", c.limit}, {"decision", c.decision}};
+  if (c.luminance_ratio) j["luminance_ratio"] = *c.luminance_ratio;
+  if (c.luminance_u) j["luminance_u"] = *c.luminance_u;
+}
+
+void from_json(const nlohmann::json& j, ColourCheck& c) {
+  json_util::ObjectReader r(j, "colour");
+  c.kind = r.required<std::string>("kind");
+  c.difference = r.required<double>("difference");
+  c.u = r.required<double>("u");
+  c.limit = r.required<double>("limit");
+  c.decision = r.required<std::string>("decision");
+  c.luminance_ratio.reset();
+  c.luminance_u.reset();
+  if (r.has("luminance_ratio")) c.luminance_ratio = r.required<double>("luminance_ratio");
+  if (r.has("luminance_u")) c.luminance_u = r.required<double>("luminance_u");
+  r.finish();
+}
 
 void to_json(nlohmann::json& j, const PointRecord& p) {
   j = nlohmann::json{{"scan_id", p.scan_id},
@@ -24,6 +99,12 @@ void to_json(nlohmann::json& j, const PointRecord& p) {
                      {"delta_e00", json_util::or_null(p.delta_e00)},
                      {"diverged", p.diverged},
                      {"flags", p.flags}};
+  // Absent on points measured without a prediction (and on points stored before them).
+  if (!p.decision.empty()) j["decision"] = p.decision;
+  if (!p.u_model.empty()) j["u_model"] = p.u_model;
+  if (!p.budget.empty()) j["budget"] = p.budget;
+  if (!p.sample_sensitivity.empty()) j["sample_sensitivity"] = p.sample_sensitivity;
+  if (p.colour) j["colour"] = *p.colour;
 }
 
 void from_json(const nlohmann::json& j, PointRecord& p) {
@@ -56,6 +137,15 @@ void from_json(const nlohmann::json& j, PointRecord& p) {
     p.delta_e00 = json_util::get_as<double>(*d, "delta_e00");
   p.diverged = r.optional<bool>("diverged", false);
   p.flags = r.optional<std::vector<std::string>>("flags", {});
+  p.decision = r.optional<std::string>("decision", "");
+  if (!p.decision.empty() && p.decision != "agrees" && p.decision != "out_of_tolerance" &&
+      p.decision != "undecided")
+    throw Error::invalid("decision", fmt::format("'{}' (allowed: agrees, out_of_tolerance, undecided)", p.decision));
+  p.u_model = r.optional<std::vector<double>>("u_model", {});
+  p.budget = r.optional<std::vector<BudgetEntry>>("budget", {});
+  p.sample_sensitivity = r.optional<std::vector<SampleSensitivity>>("sample_sensitivity", {});
+  p.colour.reset();
+  if (const auto* c = r.raw("colour"); c && !c->is_null()) p.colour = c->get<ColourCheck>();
   r.finish();
   if (p.index < 0) throw Error::invalid("index", "must be >= 0");
 }

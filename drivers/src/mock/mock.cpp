@@ -37,6 +37,10 @@ struct LabConfig {
   double beta_gain = 1;  // hidden: the sample's β is reported this many times too large
   double gain = 400, dark = 2, read_noise = 3, full_scale = 1e6, integration_ms = 100;
   double speed_deg_s = 20, time_scale = 0;
+  // Each move lands within ±this of its target, uniformly (seeded): where the light goes,
+  // not what the encoder reports (the arm is read back at its target, as an open-loop
+  // stepper would be).
+  double position_repeatability_deg = 0;
   std::uint64_t seed = 1;
   twin::EstimatorOptions estimator;
   Faults faults;
@@ -69,6 +73,8 @@ LabConfig read_config(const nlohmann::json& j) {
   c.full_scale = r.optional_in<double>("full_scale_counts", c.full_scale, 1, 1e15);
   c.integration_ms = r.optional_in<double>("integration_ms", c.integration_ms, 0.01, 60000);
   c.speed_deg_s = r.optional_in<double>("speed_deg_s", c.speed_deg_s, 0.01, 1000);
+  c.position_repeatability_deg =
+      r.optional_in<double>("position_repeatability_deg", c.position_repeatability_deg, 0, 5, "°");
   c.time_scale = r.optional_in<double>("time_scale", c.time_scale, 0, 10);
   c.seed = r.optional<std::uint64_t>("seed", c.seed);
   c.estimator.rel_se = 1e-2;
@@ -184,6 +190,11 @@ class Lab {
     }
     clock_s_ += seconds;
     pos_[axis_index(a)] = dest;
+    if (cfg_.position_repeatability_deg > 0) {
+      std::uniform_real_distribution<double> land(-cfg_.position_repeatability_deg,
+                                                  cfg_.position_repeatability_deg);
+      landed_[axis_index(a)] = land(motion_rng_);
+    }
     if (stall) {
       alarm_[axis_index(a)] = 0x10;
       throw Error(Errc::device_alarm,
@@ -295,10 +306,12 @@ class Lab {
     integration_ms_ = ms;
   }
 
-  // The nominal geometry where the arms stand (the twin adds the arm offsets itself).
+  // The nominal geometry where the arms stand, and where the last moves landed (the twin
+  // adds the arm offsets itself).
   Geometry geometry() {
     std::lock_guard lock(mu_);
-    double ti = pos_[axis_index(Axis::incidence)], tr = pos_[axis_index(Axis::receive)];
+    double ti = pos_[axis_index(Axis::incidence)] + landed_[axis_index(Axis::incidence)];
+    double tr = pos_[axis_index(Axis::receive)] + landed_[axis_index(Axis::receive)];
     if (ti < 0) {  // mirror image: same configuration for the plane of measurement
       ti = -ti;
       tr = -tr;
@@ -338,7 +351,9 @@ class Lab {
   std::condition_variable cv_;
   std::atomic<bool> stop_{false};
   std::mt19937_64 rng_;
+  std::mt19937_64 motion_rng_{cfg_.seed ^ 0x9e3779b97f4a7c15ull};  // apart from the noise's
   std::array<double, 4> pos_{};
+  std::array<double, 4> landed_{};  // where the last move of each axis landed, off its target
   std::array<std::uint32_t, 4> alarm_{};
   std::array<bool, 4> homed_{};
   double clock_s_ = 0;

@@ -27,7 +27,8 @@ constexpr const auto& enum_names(Severity) { return kSeverityNames; }  // proto/
 // Stable alert kinds.
 namespace alert_kind {
 inline constexpr std::string_view divergence = "divergence";            // a point diverged
-inline constexpr std::string_view sustained = "sustained_divergence";   // m of the last n
+inline constexpr std::string_view sustained = "sustained_divergence";   // the scan's verdict
+inline constexpr std::string_view calibration_hint = "calibration_hint"; // an in-spec offset to calibrate
 inline constexpr std::string_view reference_drift = "reference_drift";  // instrument health
 inline constexpr std::string_view device_fault = "device_fault";        // scan paused by a fault
 inline constexpr std::string_view scan_failed = "scan_failed";

@@ -20,6 +20,43 @@
 
 namespace gonio {
 
+// One line of a predicted point's uncertainty budget (GUM): an input quantity of the
+// instrument, its standard uncertainty u (one per channel, or one for all), the sensitivity
+// of β to it and the contribution u·|c| (with its second-order term) per channel.
+struct BudgetEntry {
+  std::string component;      // "receive_arm_deg", "reference_white_rel", ...
+  std::string distribution;   // "rectangular", "triangular", "normal"
+  std::string unit;           // of the input: "deg", "1"
+  bool random = false;        // independent from point to point
+  std::vector<double> u, sensitivity, contribution;
+  // ∂²β/∂x² per channel where β is curved in the input (the arms at a glossy peak); empty
+  // where β is linear in it. The verdict's fit uses it for offsets beyond a step.
+  std::vector<double> curvature;
+  friend bool operator==(const BudgetEntry&, const BudgetEntry&) = default;
+};
+
+// ∂β/∂θ per channel for one parameter of the sample's catalogued BSDF (the scan's verdict
+// fits them; docs/architecture.md §6).
+struct SampleSensitivity {
+  std::string parameter;      // "conductor.alpha", "lambert.albedo@600"
+  double value = 0;           // catalogued
+  std::vector<double> sensitivity;
+  friend bool operator==(const SampleSensitivity&, const SampleSensitivity&) = default;
+};
+
+// The colour of measured against predicted, judged by the same decision rule as the
+// spectrum: CIEDE2000 where CIELAB is defined (β ≤ 1), else the chromaticity distance
+// Δu′v′ and the relative luminance apart.
+struct ColourCheck {
+  std::string kind;           // "ciede2000" or "chromaticity"
+  double difference = 0;      // ΔE00, or Δu′v′
+  double u = 0;               // its standard uncertainty
+  double limit = 0;           // the acceptance limit
+  std::optional<double> luminance_ratio, luminance_u;  // chromaticity: Y_m / Y_p and its u
+  std::string decision;
+  friend bool operator==(const ColourCheck&, const ColourCheck&) = default;
+};
+
 struct PointRecord {
   std::int64_t scan_id = 0;
   std::int64_t index = 0;           // 0-based point index within the plan
@@ -33,12 +70,25 @@ struct PointRecord {
   std::string twin_version;         // empty without prediction
   std::optional<double> z_max;      // max |z| over channels
   std::optional<double> delta_e00;  // CIEDE2000 measured vs predicted
-  bool diverged = false;
+  bool diverged = false;            // decision == "out_of_tolerance"
+  // The decision rule (docs/decision-rule.md): "agrees", "out_of_tolerance" or "undecided";
+  // empty without a prediction.
+  std::string decision;
+  std::vector<double> u_model;      // the twin's u from the instrument's tolerances
+  std::vector<BudgetEntry> budget;
+  std::vector<SampleSensitivity> sample_sensitivity;
+  std::optional<ColourCheck> colour;
   std::vector<std::string> flags;   // "no_prediction", "saturated", "reference_read", ...
 
   friend bool operator==(const PointRecord&, const PointRecord&) = default;
 };
 
+void to_json(nlohmann::json& j, const BudgetEntry& b);
+void from_json(const nlohmann::json& j, BudgetEntry& b);
+void to_json(nlohmann::json& j, const SampleSensitivity& s);
+void from_json(const nlohmann::json& j, SampleSensitivity& s);
+void to_json(nlohmann::json& j, const ColourCheck& c);
+void from_json(const nlohmann::json& j, ColourCheck& c);
 void to_json(nlohmann::json& j, const PointRecord& p);
 // Strict: unknown keys rejected, spectra validated (used by the store and by clients).
 void from_json(const nlohmann::json& j, PointRecord& p);
