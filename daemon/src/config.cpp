@@ -349,10 +349,10 @@ json Config::to_json() const {
                  {"max_samples", twin_max_samples},
                  {"replicates", twin_replicates},
                  {"seed", twin_seed}};
-  doc["divergence"] = {{"z_threshold", z_threshold},
+  doc["divergence"] = {{"coverage_k", coverage_k},
+                       {"z_threshold", z_threshold},
                        {"delta_e_threshold", delta_e_threshold},
-                       {"sustained_m", sustained_m},
-                       {"sustained_n", sustained_n},
+                       {"delta_uv_threshold", delta_uv_threshold},
                        {"reference_drift", reference_drift},
                        {"pause_on_sustained", pause_on_sustained}};
   doc["webhook"] = {{"url", webhook_url},
@@ -569,10 +569,16 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
 
   if (const json div = table(top, "divergence"); !div.empty()) {
     ObjectReader r(div, "divergence");
+    c.coverage_k = r.optional_in<double>("coverage_k", c.coverage_k, 0.5, 10);
     c.z_threshold = r.optional_in<double>("z_threshold", c.z_threshold, 0.5, 100);
     c.delta_e_threshold = r.optional_in<double>("delta_e_threshold", c.delta_e_threshold, 0.1, 100);
-    c.sustained_m = static_cast<int>(r.optional_in<long long>("sustained_m", c.sustained_m, 1, 1000));
-    c.sustained_n = static_cast<int>(r.optional_in<long long>("sustained_n", c.sustained_n, 1, 1000));
+    c.delta_uv_threshold = r.optional_in<double>("delta_uv_threshold", c.delta_uv_threshold, 1e-4, 0.1);
+    // The m-of-n window gave way to the scan's verdict; a kept configuration still loads.
+    for (const char* gone : {"sustained_m", "sustained_n"})
+      if (r.raw(gone))
+        c.warnings.push_back(fmt::format("divergence.{} is no longer used: the scan's verdict decides "
+                                         "when a divergence is sustained",
+                                         gone));
     c.reference_drift = r.optional_in<double>("reference_drift", c.reference_drift, 0.001, 1);
     c.pause_on_sustained = r.optional<bool>("pause_on_sustained", c.pause_on_sustained);
     c.diagnose = r.optional<bool>("diagnose", c.diagnose);
@@ -638,12 +644,6 @@ Config Config::load(const std::string& path, const std::optional<Config>& base) 
 }
 
 void Config::validate() const {
-  if (sustained_m > sustained_n)
-    throw Error(Errc::out_of_range,
-                fmt::format("divergence.sustained_m = {} must not exceed divergence.sustained_n "
-                            "= {}",
-                            sustained_m, sustained_n),
-                "divergence.sustained_m");
   if (!allow_remote)
     for (std::size_t i = 0; i < listen.size(); ++i)
       if (!listen[i].loopback())

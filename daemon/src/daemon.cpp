@@ -90,6 +90,7 @@ Config load_config(const DaemonOptions& o) {
       c.listen.push_back(ListenUri::parse(o.listen[i], fmt::format("--listen[{}]", i)));
   }
   if (o.log_level) c.log_level = *o.log_level;
+  for (const auto& w : c.warnings) spdlog::warn("config: {}", w);
   if (c.motion.empty() || c.photometer.empty())
     throw Error::invalid("instrument", "no instrument configured: pass --mock, or a config file "
                                        "with [instrument.motion] and [instrument.photometer]");

@@ -59,8 +59,11 @@ Instrument::Instrument(const Config& config, Store& store, TwinService& twin, Al
                       join_field("instrument", e.field()));
         }
       }()) {
-  divergence_ = DivergenceSettings{config.z_threshold, config.delta_e_threshold,
-                                   config.sustained_m, config.sustained_n, config.reference_drift};
+  divergence_ = DivergenceSettings{.coverage_k = config.coverage_k,
+                                   .z_threshold = config.z_threshold,
+                                   .delta_e_threshold = config.delta_e_threshold,
+                                   .delta_uv_threshold = config.delta_uv_threshold,
+                                   .reference_drift = config.reference_drift};
 }
 
 Instrument::~Instrument() { shutdown(); }

@@ -47,10 +47,18 @@ double seconds_since(Clock::time_point t0) {
 void Instrument::start_run(const Scan& scan) {
   auto r = std::make_unique<Run>();
   r->scan = scan;
-  r->window = SustainedWindow(config_.sustained_m, config_.sustained_n);
   r->next = static_cast<std::size_t>(store_.next_point_index(scan.id));
   const auto sample = store_.sample(scan.plan.sample_id);
   r->tolerance = sample ? sample->spec.tolerance : 0;
+  r->evidence = ScanEvidence(r->tolerance, divergence_.coverage_k);
+  // A resumed scan's verdict weighs the points stored before, as if it had never stopped.
+  for (std::size_t first = 0; first < r->next; first += 1000)
+    for (const auto& p : store_.points(scan.id, first, 1000)) r->evidence.add(p);
+  if (const auto last = store_.latest_fit(scan.id, "verdict")) {
+    const auto& v = last->result;
+    r->verdict_stored = v.value("decision", "") + "|" + (v.contains("cause") && v["cause"].is_object() ? v["cause"].value("parameter", "") : "");
+    r->sustained_raised = v.value("decision", "") == "out_of_tolerance" || v.value("decision", "") == "instrument_out_of_spec";
+  }
   r->sample_id = scan.plan.sample_id;
   // One profile for the whole run, even if a calibration replaces it meanwhile.
   auto snap = twin_.snapshot();
@@ -60,7 +68,11 @@ void Instrument::start_run(const Scan& scan) {
     r->prediction_note = "the sample has no reference BSDF: measured without predictions";
   } else {
     try {
-      auto tw = twin_.make(*sample->spec.bsdf, scan.plan.wavelengths, "sample.bsdf", snap.profile);
+      r->spec = *sample->spec.bsdf;
+      const auto& grid = scan.plan.wavelengths;
+      auto tw = std::make_shared<const ScanTwin>(
+          twin_.make(r->spec, grid, "sample.bsdf", snap.profile), r->spec,
+          [&](const std::string& spec) { return twin_.make(spec, grid, "sample.bsdf", snap.profile); });
       if (r->next < scan.points_total)
         r->batch = twin_.batch(std::move(tw), scan.plan.geometries, scan.plan.geometry_index(r->next));
     } catch (const Error& e) {
@@ -315,10 +327,13 @@ void Instrument::step() {
     beat();
     const auto t0 = Clock::now();
     try {
-      const auto pred = r.batch->wait(gi);
-      p.predicted = pred.spectrum();
+      auto pp = r.batch->wait(gi);
+      p.predicted = pp.prediction.spectrum();
       p.twin_version = r.twin_version;
-      if (!pred.diagnostics.converged) p.flags.push_back("prediction_unconverged");
+      p.u_model = pp.budget.u_model;
+      p.budget = budget_entries(pp.budget);
+      p.sample_sensitivity = std::move(pp.sample);
+      if (!pp.prediction.diagnostics.converged) p.flags.push_back("prediction_unconverged");
     } catch (const Error& e) {
       p.flags.push_back("prediction_failed");
       spdlog::warn("scan {} point {}: no prediction: {}", r.scan.id, idx, e.what());
@@ -329,10 +344,14 @@ void Instrument::step() {
   }
 
   if (p.predicted) {
-    const auto d = evaluate_point(p.measured, *p.predicted, r.tolerance, r.colorimeter.get(), divergence_);
+    const auto d = evaluate_point(p.measured, *p.predicted, p.u_model, p.budget, r.tolerance,
+                                  r.colorimeter.get(), divergence_);
     p.z_max = d.z_max;
     p.delta_e00 = d.delta_e00;
+    p.colour = d.colour;
+    p.decision = decision_text(d.decision);
     p.diverged = d.diverged;
+    if (d.inconsistent) p.flags.push_back("inconsistent");
   }
   p.finished_at = utc::now();
 
@@ -364,34 +383,62 @@ void Instrument::step() {
     alerts_.raise(AlertDraft{std::string(alert_kind::divergence), Severity::warning,
                              fmt::format("divergence:scan:{}", r.scan.id), r.scan.id, r.sample_id,
                              p.index,
-                             fmt::format("scan {} point {} ({}): measured and predicted differ "
-                                         "(max |z| = {:.1f}{})",
-                                         r.scan.id, idx, g.to_string(), p.z_max.value_or(0),
+                             fmt::format("scan {} point {} ({}): out of tolerance (±{:g} %, k = {:g}; "
+                                         "max |z| = {:.1f}{})",
+                                         r.scan.id, idx, g.to_string(), 100 * r.tolerance,
+                                         divergence_.coverage_k, p.z_max.value_or(0),
                                          p.delta_e00 ? fmt::format(", ΔE00 = {:.2f}", *p.delta_e00)
                                                      : std::string())});
   }
-  if (p.predicted && r.window.push(p.diverged) && !r.sustained_raised) {
-    r.sustained_raised = true;
-    const auto alert = alerts_.raise(AlertDraft{std::string(alert_kind::sustained), Severity::critical,
-                             fmt::format("sustained:scan:{}", r.scan.id), r.scan.id, r.sample_id,
-                             p.index,
-                             fmt::format("scan {}: {} of the last {} points diverge from the twin "
-                                         "(up to point {})",
-                                         r.scan.id, r.window.diverged_in_window(),
-                                         config_.sustained_n, idx)});
-    if (sustained_listener_) sustained_listener_(r.scan.id, alert.id);
-    if (config_.pause_on_sustained) {
-      std::lock_guard lock(mu_);
-      control_ = Control::pause;
-      control_reason_ = "sustained divergence from the twin";
-      control_actor_ = "goniod";
-    }
+  if (p.predicted) {
+    r.evidence.add(p);
+    judge_scan(p.index, false);
   }
   if (p.diverged) ++r.scan.points_diverged;
   publish_progress();
   if (r.next >= r.scan.points_total) {
+    judge_scan(p.index, true);
     std::lock_guard sched(sched_mu_);
     finish_run(ScanState::completed, "", "goniod");
+  }
+}
+
+void Instrument::judge_scan(std::int64_t point_index, bool final) {
+  Run& r = *run_;
+  if (r.evidence.points() == 0) return;
+  const auto v = r.evidence.verdict();
+  const auto key = v.decision + "|" + (v.cause ? v.cause->parameter : std::string());
+  // Stored when it changes and at the end: scan.get shows the latest.
+  if (key != r.verdict_stored || final) {
+    try {
+      store_.insert_fit(r.scan.id, "verdict", r.spec, v.to_json(), "goniod");
+      r.verdict_stored = key;
+    } catch (const Error& e) {
+      spdlog::warn("scan {}: cannot store the verdict: {}", r.scan.id, e.what());
+    }
+  }
+  if (v.alerts()) {
+    // One alert per scan, updated (not duplicated) as the verdict firms up.
+    const auto alert = alerts_.raise(AlertDraft{std::string(alert_kind::sustained), Severity::critical,
+                                                fmt::format("sustained:scan:{}", r.scan.id), r.scan.id,
+                                                r.sample_id, point_index,
+                                                fmt::format("scan {}: {}", r.scan.id, v.summary)});
+    // The inverse twin refits the named cause once the whole scan is in.
+    if (final && v.cause && sustained_listener_) sustained_listener_(r.scan.id, alert.id);
+    if (!r.sustained_raised) {
+      r.sustained_raised = true;
+      if (config_.pause_on_sustained) {
+        std::lock_guard lock(mu_);
+        control_ = Control::pause;
+        control_reason_ = "sustained divergence from the twin";
+        control_actor_ = "goniod";
+      }
+    }
+  }
+  if (final && v.calibration_hint) {
+    alerts_.raise(AlertDraft{std::string(alert_kind::calibration_hint), Severity::warning,
+                             fmt::format("calibration_hint:scan:{}", r.scan.id), r.scan.id, r.sample_id,
+                             point_index, fmt::format("scan {}: {}", r.scan.id, v.summary)});
   }
 }
 

@@ -11,6 +11,7 @@
 #include "gonio/daemon/divergence.hpp"
 #include "gonio/daemon/instrument.hpp"
 #include "gonio/daemon/point_reduction.hpp"
+#include "gonio/daemon/verdict.hpp"
 #include "gonio/drivers/photometer/photometer.hpp"
 #include "gonio/proto/error.hpp"
 
@@ -33,7 +34,9 @@ struct Instrument::Run {
   std::size_t since_start = 0;  // points measured in this run
   std::optional<drivers::Reading> reference, reference_dark;
   ReferenceDriftMonitor drift{DivergenceSettings{}.reference_drift};
-  SustainedWindow window{3, 5};
+  ScanEvidence evidence{0, 2};     // every point of the scan, stored ones included
+  std::string spec;               // the sample's catalogued BSDF
+  std::string verdict_stored;     // decision and cause of the verdict last stored
   double busy_seconds = 0;  // wall time of the points of this run (for the ETA)
   bool sustained_raised = false;
 };

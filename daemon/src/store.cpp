@@ -1046,6 +1046,7 @@ StoredFit Store::insert_fit(std::int64_t scan_id, const std::string& kind, const
   f.id = sqlite3_last_insert_rowid(writer_->db);
   const char* action = kind == "calibrate"   ? "instrument.calibrate"
                        : kind == "diagnosis" ? "divergence.diagnose"
+                       : kind == "verdict"   ? "scan.verdict"
                                              : "scan.fit";
   audit_in(*writer_, actor, action,
            fmt::format("scan:{}", scan_id), json{{"fit", f.id}, {"model", model}});
@@ -1055,12 +1056,22 @@ StoredFit Store::insert_fit(std::int64_t scan_id, const std::string& kind, const
 
 std::vector<StoredFit> Store::fits(std::int64_t scan_id, std::size_t limit) const {
   auto c = read();
-  Stmt s(*c, fmt::format("SELECT {} FROM fits WHERE scan_id = ? ORDER BY id DESC LIMIT ?",
+  Stmt s(*c, fmt::format("SELECT {} FROM fits WHERE scan_id = ? AND kind <> 'verdict' "
+                         "ORDER BY id DESC LIMIT ?",
                          kFitColumns));
   s.bind(1, scan_id).bind(2, limit);
   std::vector<StoredFit> out;
   while (s.step()) out.push_back(read_fit(s));
   return out;
+}
+
+std::optional<StoredFit> Store::latest_fit(std::int64_t scan_id, const std::string& kind) const {
+  auto c = read();
+  Stmt s(*c, fmt::format("SELECT {} FROM fits WHERE scan_id = ? AND kind = ? ORDER BY id DESC LIMIT 1",
+                         kFitColumns));
+  s.bind(1, scan_id).bind(2, kind);
+  if (!s.step()) return std::nullopt;
+  return read_fit(s);
 }
 
 StoredProfile Store::insert_profile(const std::string& name, const nlohmann::json& profile,

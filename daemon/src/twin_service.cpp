@@ -155,7 +155,7 @@ std::vector<twin::Prediction> TwinService::predict(const twin::Twin& twin,
   return out;
 }
 
-std::shared_ptr<TwinService::Batch> TwinService::batch(std::shared_ptr<const twin::Twin> twin,
+std::shared_ptr<TwinService::Batch> TwinService::batch(std::shared_ptr<const ScanTwin> twin,
                                                        std::vector<Geometry> geometries,
                                                        std::size_t first, std::size_t window) {
   if (window == 0) window = std::max<std::size_t>(8, 4 * workers_.size());
@@ -165,7 +165,7 @@ std::shared_ptr<TwinService::Batch> TwinService::batch(std::shared_ptr<const twi
 struct TwinService::Batch::State {
   struct Slot {
     bool done = false;
-    std::optional<twin::Prediction> value;
+    std::optional<ScanTwin::PointPrediction> value;
     std::exception_ptr error;
   };
   std::mutex mu;
@@ -176,7 +176,7 @@ struct TwinService::Batch::State {
   std::atomic<bool> cancelled{false};
 };
 
-TwinService::Batch::Batch(TwinService& pool, std::shared_ptr<const twin::Twin> twin,
+TwinService::Batch::Batch(TwinService& pool, std::shared_ptr<const ScanTwin> twin,
                           std::vector<Geometry> geoms, std::size_t first, std::size_t window)
     : pool_(pool), twin_(std::move(twin)), geometries_(std::move(geoms)), window_(window),
       state_(std::make_shared<State>()) {
@@ -219,7 +219,7 @@ void TwinService::Batch::submit_upto(std::size_t end) {
   }
 }
 
-twin::Prediction TwinService::Batch::wait(std::size_t i) {
+ScanTwin::PointPrediction TwinService::Batch::wait(std::size_t i) {
   auto& st = *state_;
   std::unique_lock lock(st.mu);
   if (i < st.base || i >= geometries_.size())

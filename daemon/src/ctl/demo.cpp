@@ -142,6 +142,7 @@ int run_demo(const DemoOptions& d, const Options& o) {
     const auto info = s.call("system.info");
     const double z_threshold = info["divergence"]["z_threshold"].get<double>();
     const double de_threshold = info["divergence"]["delta_e_threshold"].get<double>();
+    const double coverage_k = info["divergence"]["coverage_k"].get<double>();
 
     json sample;
     try {
@@ -177,7 +178,7 @@ int run_demo(const DemoOptions& d, const Options& o) {
     Table t({"θr", fmt::format("β meas {:g} nm", nm), "±u", "β twin", "±se", "max|z|", "ΔE00", ""});
     std::vector<double> x, ym, um, yp, up, z, de;
     double z_worst = 0, de_worst = 0, de_sum = 0, tr_z = 0, tr_de = 0;
-    std::size_t n_div = 0, n_de = 0;
+    std::size_t n_div = 0, n_de = 0, n_agree = 0, n_undecided = 0;
     for (const auto& p : points) {
       const double tr = p["planned"]["theta_r"].get<double>();
       const auto& m = p["measured"];
@@ -195,19 +196,25 @@ int run_demo(const DemoOptions& d, const Options& o) {
         if (de.back() > de_worst) de_worst = de.back(), tr_de = tr;
       }
       if (p["diverged"].get<bool>()) ++n_div;
+      const auto decision = p.value("decision", std::string());
+      n_agree += decision == "agrees";
+      n_undecided += decision == "undecided";
       t.add({fmt::format("{:g}", tr), fmt::format("{:.4g}", ym.back()), fmt::format("{:.2g}", um.back()),
              has_pred ? fmt::format("{:.4g}", yp.back()) : "-", has_pred ? fmt::format("{:.2g}", up.back()) : "-",
              std::isfinite(z.back()) ? fmt::format("{:.2f}", z.back()) : "-",
              std::isfinite(de.back()) ? fmt::format("{:.2f}", de.back()) : "-",
-             p["diverged"].get<bool>() ? "DIVERGED" : ""});
+             p["diverged"].get<bool>() ? "OUT OF TOLERANCE" : decision == "undecided" ? "undecided" : ""});
     }
     std::cout << "\nmeasured vs predicted (θi = 45°):\n" << t.render();
     const auto alerts = s.call("alert.list", json{{"scan", id}, {"limit", 1000}});
+    const auto verdict = s.call("scan.get", json{{"scan", id}})["verdict"];
     std::cout << fmt::format(
-        "\ndivergence summary: {} of {} points diverge (max |z| > {:g} or ΔE00 > {:g}); worst max|z| "
-        "{:.2f} at θr = {:g}°; ΔE00 mean {:.2f}, worst {:.2f} at θr = {:g}°; {} alert(s)\n",
-        n_div, points.size(), z_threshold, de_threshold, z_worst, tr_z, n_de ? de_sum / static_cast<double>(n_de) : 0.0,
-        de_worst, tr_de, alerts.size());
+        "\ndivergence summary: {} of {} points out of tolerance (±{:g} %, k = {:g}), {} agree, {} "
+        "undecided; worst |m − p|/u_c {:.2f} at θr = {:g}°; ΔE00 mean {:.2f}, worst {:.2f} at θr = {:g}°; "
+        "{} alert(s)\nverdict: {}\n",
+        n_div, points.size(), 100 * sample["tolerance"].get<double>(), coverage_k, n_agree, n_undecided,
+        z_worst, tr_z, n_de ? de_sum / static_cast<double>(n_de) : 0.0, de_worst, tr_de, alerts.size(),
+        verdict.is_object() ? verdict.value("summary", std::string()) : std::string("none"));
     for (const auto& a : alerts)
       std::cout << fmt::format("  alert {} [{}] {} (×{})\n", cell(a["id"]), cell(a["severity"]),
                                cell(a["message"]), cell(a["count"]));

@@ -80,6 +80,8 @@ void register_scan(MethodRegistrar& reg, Services& s) {
     json fits = json::array();
     for (const auto& f : s.store.fits(id, methods::kFitsShown)) fits.push_back(methods::fit_json(f));
     out["fits"] = std::move(fits);
+    const auto verdict = s.store.latest_fit(id, "verdict");
+    out["verdict"] = verdict ? verdict->result : json(nullptr);
     return out;
   });
 

@@ -84,10 +84,10 @@ void register_system(MethodRegistrar& reg, Services& s) {
                          {"schema_version", Store::kSchemaVersion},
                          {"started_at", s.started_at},
                          {"state_dir", s.state_dir.string()},
-                         {"divergence", {{"z_threshold", s.config.z_threshold},
+                         {"divergence", {{"coverage_k", s.config.coverage_k},
+                                         {"z_threshold", s.config.z_threshold},
                                          {"delta_e_threshold", s.config.delta_e_threshold},
-                                         {"sustained_m", s.config.sustained_m},
-                                         {"sustained_n", s.config.sustained_n},
+                                         {"delta_uv_threshold", s.config.delta_uv_threshold},
                                          {"reference_drift", s.config.reference_drift}}}}
                         .dump();
     t.back() = ',';  // the closing brace comes after the live members

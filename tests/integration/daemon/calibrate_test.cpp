@@ -1,9 +1,11 @@
 // instrument.calibrate and the diagnosis of a sustained divergence against a real goniod on
 // the mock, whose lab hides an instrument fault the configured profile does not know about:
-//  - a receive arm that stands 0.5° off what it reports: the scan of a known glossy sample
-//    diverges, the calibration finds the offset, the corrected profile is stored as version 1,
+//  - a receive arm that stands 1° off what it reports (twice its ±0.5° data sheet): the scan
+//    of a known glossy sample is judged instrument_out_of_spec, naming the receive arm; the
+//    calibration finds the offset, the corrected profile is stored as version 1,
 //    the next scan of the same sample agrees with the twin, and a restarted goniod keeps it;
-//  - a reference white 20 % off: the divergence alert names the gain.
+//  - a reference white 20 % off: the verdict names the gain, and the diagnosis refits it
+//    through the inverse twin at the end of the scan.
 #include <gtest/gtest.h>
 
 #include "harness.hpp"
@@ -32,13 +34,7 @@ MockOptions lab_with(const std::string& hidden) {
   return o;
 }
 
-// The spectral test alone: on a glossy peak (β ≈ 40) CIELAB magnifies a 1 % difference in
-// one channel of three to ΔE00 ≈ 3, which would hide what the calibration changed.
-MockOptions offset_lab() {
-  auto o = lab_with("arm_offsets_deg = { receive = -0.5 }\n");
-  o.extra = "[divergence]\ndelta_e_threshold = 100\n";
-  return o;
-}
+MockOptions offset_lab() { return lab_with("arm_offsets_deg = { receive = -1.0 }\n"); }
 
 TEST(InstrumentCalibrate, FindsAHiddenReceiveOffsetAndTheDivergenceVanishes) {
   TempDir dir;
@@ -51,6 +47,11 @@ TEST(InstrumentCalibrate, FindsAHiddenReceiveOffsetAndTheDivergenceVanishes) {
   const auto first = completed_scan(c, "artifact", kGlossy);
   const auto diverged = c.call("scan.get", json{{"scan", first}})["points_diverged"].get<int>();
   ASSERT_GT(diverged, 0) << "the hidden offset must show as a divergence";
+  const auto verdict = c.call("scan.get", json{{"scan", first}})["verdict"];
+  EXPECT_EQ(verdict["decision"], "instrument_out_of_spec") << verdict.dump();
+  ASSERT_TRUE(verdict["cause"].is_object()) << verdict.dump();
+  EXPECT_EQ(verdict["cause"]["parameter"], "receive_arm_deg") << verdict.dump();
+  EXPECT_NEAR(verdict["cause"]["value"].get<double>(), -1.0, 0.25) << verdict.dump();
 
   const auto cal = c.call("instrument.calibrate",
                           json{{"scan", first}, {"fit", {"receive_offset_deg"}}, {"samples", 4096}});
@@ -58,7 +59,7 @@ TEST(InstrumentCalibrate, FindsAHiddenReceiveOffsetAndTheDivergenceVanishes) {
   EXPECT_TRUE(cal["applied"].get<bool>()) << cal.dump();
   const auto& p = cal["result"]["parameters"][0];
   EXPECT_EQ(p["name"], "receive_offset_deg");
-  EXPECT_NEAR(p["value"].get<double>(), -0.5, std::max(4 * p["u"].get<double>(), 0.05)) << cal.dump();
+  EXPECT_NEAR(p["value"].get<double>(), -1.0, std::max(4 * p["u"].get<double>(), 0.05)) << cal.dump();
   EXPECT_EQ(cal["profile"]["version"], 1);
   const auto status = c.call("instrument.status");
   EXPECT_EQ(status["profile"]["version"], 1) << status.dump();
@@ -69,6 +70,8 @@ TEST(InstrumentCalibrate, FindsAHiddenReceiveOffsetAndTheDivergenceVanishes) {
   const auto sc = c.call("scan.get", json{{"scan", second}});
   EXPECT_EQ(sc["points_diverged"], 0)
       << cal.dump() << c.call("scan.points", json{{"scan", second}, {"limit", 100}}).dump();
+  EXPECT_NE(sc["verdict"]["decision"], "instrument_out_of_spec") << sc["verdict"].dump();
+  EXPECT_NE(sc["verdict"]["decision"], "out_of_tolerance") << sc["verdict"].dump();
   const auto pts = c.call("scan.points", json{{"scan", second}, {"limit", 1}});
   EXPECT_NE(pts["points"][0]["twin_version"].get<std::string>().find("profile=gcms4#1"),
             std::string::npos) << pts.dump();
@@ -118,11 +121,16 @@ TEST(InstrumentCalibrate, DryRunAndBadParamsKeepTheProfile) {
   EXPECT_EQ(c.call("instrument.status")["profile"]["version"], 0);
 }
 
-TEST(DivergenceDiagnosis, TheAlertNamesAReferenceWhiteGain) {
+TEST(DivergenceDiagnosis, TheVerdictNamesAReferenceWhiteGainAndTheInverseTwinRefitsIt) {
   TempDir dir;
   Goniod g(dir.path, mock_config(lab_with("gain = 1.2\n")));
   auto c = g.unix_conn();
   const auto id = completed_scan(c, "artifact", kGlossy);
+  const auto verdict = c.call("scan.get", json{{"scan", id}})["verdict"];
+  EXPECT_EQ(verdict["decision"], "instrument_out_of_spec") << verdict.dump();
+  ASSERT_TRUE(verdict["cause"].is_object()) << verdict.dump();
+  EXPECT_EQ(verdict["cause"]["parameter"], "gain");
+  EXPECT_NEAR(verdict["cause"]["value"].get<double>(), 1.2, 0.02) << verdict.dump();
   json sustained;
   const bool diagnosed = eventually(
       [&] {
@@ -137,14 +145,19 @@ TEST(DivergenceDiagnosis, TheAlertNamesAReferenceWhiteGain) {
       120s);
   ASSERT_TRUE(diagnosed) << c.call("alert.list", json{{"scan", id}}).dump() << g.log_text();
   const auto msg = sustained["message"].get<std::string>();
-  const std::string said = "consistent with a reference-white gain of ";
+  const std::string said = "the inverse twin refits gain to ";
   const auto at = msg.find(said);
   ASSERT_NE(at, std::string::npos) << msg;
   EXPECT_NEAR(std::stod(msg.substr(at + said.size())), 1.2, 0.01) << msg;
+  EXPECT_EQ(sustained["count"].get<int>() >= 1, true);
   const auto fits = c.call("scan.get", json{{"scan", id}})["fits"];
   ASSERT_FALSE(fits.empty());
   EXPECT_EQ(fits[0]["kind"], "diagnosis");
-  EXPECT_TRUE(fits[0]["result"]["explained"].get<bool>()) << fits[0].dump();
+  EXPECT_EQ(fits[0]["result"]["cause"]["parameter"], "gain") << fits[0].dump();
+  // One sustained alert for the scan, updated as the verdict firmed up, never a second.
+  int n = 0;
+  for (const auto& a : c.call("alert.list", json{{"scan", id}})) n += a["kind"] == "sustained_divergence";
+  EXPECT_EQ(n, 1);
 }
 
 }  // namespace

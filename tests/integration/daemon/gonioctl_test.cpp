@@ -73,7 +73,8 @@ TEST(Gonioctl, DemoRunsTheMainJobEndToEnd) {
   const auto r = gonioctl({"demo", "--demo-dir", demo.string(), "--time-scale", "0"});
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("56 points"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("divergence summary"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("divergence summary: 0 of 56 points out of tolerance"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("verdict: "), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("goniod stopped (exit 0)"), std::string::npos) << r.out;
   ASSERT_TRUE(fs::exists(demo / "demo.png"));
   std::ifstream png(demo / "demo.png", std::ios::binary);

@@ -95,16 +95,16 @@ TEST(Alerts, DivergenceRaisesDedupedAlertsDeliveredByWebhookWithRetries) {
   auto sub = g.unix_conn();
   sub.call("subscribe", json{{"topics", {"alerts"}}});
   // The catalog says albedo 0.2, the sample on the stage is 0.6: every point diverges.
-  const auto id = submit(c, "mislabelled", "lambert:albedo=0.2", json{{"geometries", {"45as15", "45as25", "45as45", "45as75", "45as5", "45as-15"}}});
+  const auto id = submit(c, "mislabelled", "lambert:albedo=0.2", json{{"grids", {"in=45;out=0:60:5"}}});
   const auto sc = wait_state(c, id, {"completed", "paused"});
   ASSERT_EQ(sc["state"], "completed") << sc.dump();
-  EXPECT_EQ(sc["points_diverged"], 6);
+  EXPECT_EQ(sc["points_diverged"], 13);
   const auto alerts = c.call("alert.list", json{{"scan", id}});
   ASSERT_EQ(alerts.size(), 2u) << alerts.dump();  // one per cause, not one per point
   std::map<std::string, json> by_kind;
   for (const auto& a : alerts) by_kind[a["kind"].get<std::string>()] = a;
   EXPECT_EQ(by_kind["divergence"]["severity"], "warning");
-  EXPECT_EQ(by_kind["divergence"]["count"], 6);
+  EXPECT_EQ(by_kind["divergence"]["count"], 13);
   EXPECT_EQ(by_kind["sustained_divergence"]["severity"], "critical");
   // Subscribers saw them.
   std::set<std::string> pushed;

@@ -47,6 +47,7 @@ time_scale = 0.5
 driver = "mock"
 [divergence]
 z_threshold = 3
+coverage_k = 3
 sustained_m = 2
 sustained_n = 4
 [[auth.token]]
@@ -74,7 +75,10 @@ backoff_s = 0.05
   EXPECT_EQ(c.limits.of(drivers::Axis::tilt), (drivers::SoftLimits{-5, 5}));
   EXPECT_DOUBLE_EQ(c.limits.min_separation.value(), 4);
   EXPECT_EQ(c.motion["time_scale"], 0.5);
-  EXPECT_EQ(c.sustained_m, 2);
+  EXPECT_DOUBLE_EQ(c.coverage_k, 3);
+  // The m-of-n window's keys still load, with a warning that they do nothing.
+  ASSERT_EQ(c.warnings.size(), 2u);
+  EXPECT_NE(c.warnings[0].find("divergence.sustained_m is no longer used"), std::string::npos);
   ASSERT_EQ(c.tokens.size(), 1u);
   EXPECT_EQ(c.tokens[0].role, Role::viewer);
   EXPECT_EQ(c.webhook_backoff, std::chrono::milliseconds(50));
@@ -88,7 +92,9 @@ TEST(Config, RejectsUnknownKeysAndBadValuesNamingThem) {
   EXPECT_EQ(field_of("[server]\nlisten = [\"tcp://192.168.1.4:7700\"]\n"), "server.listen[0]");
   EXPECT_EQ(field_of("[server]\nlog_level = \"chatty\"\n"), "server.log_level");
   EXPECT_EQ(field_of("[divergence]\nz_threshold = 0\n"), "divergence.z_threshold");
-  EXPECT_EQ(field_of("[divergence]\nsustained_m = 6\nsustained_n = 5\n"), "divergence.sustained_m");
+  EXPECT_EQ(field_of("[divergence]\ncoverage_k = 0\n"), "divergence.coverage_k");
+  EXPECT_EQ(field_of("[divergence]\ncoverage_k = -2\n"), "divergence.coverage_k");
+  EXPECT_EQ(field_of("[divergence]\ndelta_uv_threshold = 1\n"), "divergence.delta_uv_threshold");
   EXPECT_EQ(field_of("[instrument.limits]\nreceive = [10, -10]\n"), "instrument.limits.receive[1]");
   EXPECT_EQ(field_of("[instrument.limits]\ntilt = [-400, 0]\n"), "instrument.limits.tilt[0]");
   EXPECT_EQ(field_of("[instrument.limits]\nmin_separation = 180\n"), "instrument.limits.min_separation");

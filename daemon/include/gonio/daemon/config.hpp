@@ -82,6 +82,9 @@ inline constexpr const char* kDemoSampleBsdf =
 std::string default_web_root();
 
 struct Config {
+  // Keys that still load but no longer do anything (logged at start).
+  std::vector<std::string> warnings;
+
   // [server]
   std::vector<ListenUri> listen;  // empty: unix:<state-dir>/goniod.sock only
   bool allow_remote = false;      // tcp/http on a non-loopback address needs this
@@ -147,13 +150,13 @@ struct Config {
   std::string twin_data_dir;  // '@file' BSDF specs from clients: only here (empty: <state-dir>/data)
 
   // [divergence]
-  double z_threshold = 5.0;
-  double delta_e_threshold = 3.0;
-  int sustained_m = 3;
-  int sustained_n = 5;
+  double coverage_k = 2.0;           // of the decision rule (docs/decision-rule.md)
+  double z_threshold = 5.0;          // |m − p|/u_c beyond it flags a point "inconsistent"
+  double delta_e_threshold = 3.0;    // the colour's acceptance limit (ΔE00)
+  double delta_uv_threshold = 0.004; // ... and above β = 1 (Δu′v′)
   double reference_drift = 0.05;     // relative drift of the reference white reading
   bool pause_on_sustained = false;
-  bool diagnose = true;              // try arm offsets and gain on a sustained divergence
+  bool diagnose = true;              // refit the verdict's named cause through the inverse twin
 
   // [webhook]
   std::string webhook_url;  // http://HOST:PORT/PATH; empty: no webhook
@@ -191,7 +194,7 @@ struct Config {
   static Config parse(std::string_view toml_text, std::string_view source = "<config>",
                       const std::optional<Config>& base = std::nullopt);
   static Config load(const std::string& path, const std::optional<Config>& base = std::nullopt);
-  // Checks cross-field rules (sustained_m <= sustained_n, loopback unless allow_remote).
+  // Checks cross-field rules (loopback unless allow_remote).
   void validate() const;
   // Every key of the file with the value in effect, defaults filled in, in the file's units
   // and layout ([server], [instrument.limits], ...): what goniod --check-config prints.

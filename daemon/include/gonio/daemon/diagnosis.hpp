@@ -1,12 +1,13 @@
-// Diagnosis of a sustained divergence (docs/architecture.md §6): when a scan's points keep
-// disagreeing with the twin, the inverse twin tries the instrument parameters that most
-// often go wrong — an arm offset, the reference white's gain — one at a time on the scan's
-// measured points, and the alert says which one explains the disagreement, or that none does
-// (then the sample itself likely differs from its reference BSDF).
+// Diagnosis of a sustained divergence (docs/architecture.md §6, step 8): the inverse-twin
+// refit of the cause a scan's verdict names.
 //
-// explain() is the pure decision; Diagnoser runs the fits on a thread of its own, so neither
-// the runner nor an RPC worker waits for them, stores the result with the scan (a fit of
-// kind "diagnosis") and appends the verdict to the alert.
+// The verdict (verdict.hpp) names its cause from a model linear in each candidate, refitted
+// after every point. When a scan whose verdict raised the sustained alert ends, the Diagnoser
+// refits that one parameter through the inverse twin on the whole scan — nonlinear, the
+// instrument simulated: fit_material for a parameter of the sample's BSDF, calibrate for an
+// instrument input — stores the fit with the scan (kind "diagnosis") and appends the refined
+// value to the alert. It runs on a thread of its own, so neither the runner nor an RPC worker
+// waits for it. A verdict that names no cause (too few points, a tie) is not refitted.
 #pragma once
 
 #include <condition_variable>
@@ -27,26 +28,12 @@ class AlertService;
 class Store;
 class TwinService;
 
-// The single-parameter explanations tried, in this order.
-const std::vector<std::string>& diagnosis_parameters();
-
-// χ²/dof of the stored measured against predicted β (u and the twin's s.e. in quadrature) over
-// the points with a prediction; nullopt when there is none.
-std::optional<double> chi2_per_dof(const std::vector<PointRecord>& points);
-
-struct Verdict {
-  bool explained = false;
-  std::optional<std::size_t> best;   // index into the candidates
-  std::vector<std::size_t> alike;    // others that explain it as well (not separable)
-  std::string text;                  // one sentence for the alert
-};
-
-// A candidate explains the divergence when its fit is usable (converged, off its bounds,
-// identifiable, with an uncertainty narrower than its range), brings χ²/dof to at most
-// kExplainedChi2 and to at most a quarter of `before`. A fit on its bound never explains, but
-// when it fits best the text says so. `candidates[i]` fitted diagnosis_parameters()[i] alone.
-inline constexpr double kExplainedChi2 = 2.0;
-Verdict explain(double before, const std::vector<twin::FitResult>& candidates);
+// The calibrate parameter of a verdict's instrument input ("receive_arm_deg" →
+// "receive_offset_deg"); nullopt for one calibrate does not fit.
+std::optional<std::string> calibration_parameter(const std::string& verdict_parameter);
+// `spec` with its parameter `name` (as spec_parameters names it) marked free ('?'), started at
+// its catalogued value; nullopt when the spec has no such parameter.
+std::optional<std::string> fit_template(const std::string& spec, const std::string& name);
 
 class Diagnoser {
  public:

@@ -1,66 +1,70 @@
 // Divergence monitor: does a measured point agree with the twin's prediction?
 //
-// Per channel c (docs/architecture.md §6):
-//     z_c = (m_c − p_c) / √(σm_c² + σp_c² + (tol · p_c)²)
-// with σm the measurement's standard uncertainty, σp the twin's standard error and tol the
-// sample's relative tolerance (which absorbs what neither uncertainty models: the catalog
-// BSDF is a model of the sample, not the sample). A point diverges when max |z| passes
-// z_threshold or when the CIEDE2000 difference of the two spectra (D65, 10° observer,
-// computed on the scan's grid) passes delta_e_threshold. m diverged points among the last
-// n make a sustained divergence. Reference drift compares the dark-corrected reference
-// white signal with the scan's first reading: a stable lamp and detector keep the ratio 1.
+// The sample's tolerance is an acceptance limit, not an uncertainty (ISO 14253-1, JCGM
+// 106:2012; docs/decision-rule.md). Per channel c, with d = m − p and its combined standard
+// uncertainty u_c = √(u_m² + s_p² + u_model²) (the measurement's, the twin's Monte Carlo
+// error, and the twin's budget from the instrument's stated tolerances), T = tol·p and the
+// coverage factor k:
+//
+//     agrees            |d| + k·u_c ≤ T       (guarded acceptance)
+//     out_of_tolerance  |d| − k·u_c > T       (guarded rejection)
+//     undecided         otherwise
+//
+// A point is out of tolerance when one channel or its colour is, agrees when every channel
+// and its colour agree. Colour is judged the same way: CIEDE2000 (D65, 10°) where CIELAB is
+// defined (β ≤ 1), else the chromaticity distance Δu′v′ and the relative luminance Y_m/Y_p
+// apart, each with its uncertainty propagated from the spectra's (the budget's components
+// correlated across channels). z = d/u_c is kept as a figure. Reference drift compares the
+// dark-corrected reference white signal with the scan's first reading.
 #pragma once
 
 #include <cstddef>
 #include <deque>
 #include <memory>
 #include <optional>
+#include <string>
+#include <vector>
 
+#include "gonio/proto/point.hpp"
 #include "gonio/proto/spectrum.hpp"
 #include "gonio/twin/color.hpp"
 
 namespace gonio::daemon {
 
 struct DivergenceSettings {
-  double z_threshold = 5.0;
-  double delta_e_threshold = 3.0;
-  int sustained_m = 3;
-  int sustained_n = 5;
+  double coverage_k = 2.0;
+  double z_threshold = 5.0;          // |z| beyond it flags the point "inconsistent"
+  double delta_e_threshold = 3.0;    // the colour's acceptance limit, ΔE00
+  double delta_uv_threshold = 0.004; // ... and above β = 1, Δu′v′
   double reference_drift = 0.05;
 };
+
+enum class Decision { agrees, undecided, out_of_tolerance };
+const char* decision_text(Decision d);
+// The worse of two decisions (out_of_tolerance > undecided > agrees).
+Decision worse(Decision a, Decision b);
+// The rule itself for a difference d with standard uncertainty u against the limit T.
+Decision decide(double d, double u, double limit, double k);
 
 struct PointDivergence {
   double z_max = 0;
   std::size_t worst_channel = 0;
-  std::optional<double> delta_e00;  // nullopt without a colorimeter for the grid
-  bool diverged = false;
+  std::optional<double> delta_e00;   // when CIEDE2000 is defined
+  std::optional<ColourCheck> colour; // nullopt without a colorimeter for the grid
+  Decision decision = Decision::undecided;
+  bool diverged = false;             // decision == out_of_tolerance
+  bool inconsistent = false;         // z_max > z_threshold
 };
 
-// `colorimeter` may be null (grid without visible overlap). Spectra on the same grid.
+// The spectra on the same grid; `budget` (may be empty) correlates the model's uncertainty
+// across channels; `u_model` per channel (may be empty: none).
 PointDivergence evaluate_point(const Spectrum& measured, const Spectrum& predicted,
-                               double tolerance, const twin::Colorimeter* colorimeter,
-                               const DivergenceSettings& s);
+                               const std::vector<double>& u_model,
+                               const std::vector<BudgetEntry>& budget, double tolerance,
+                               const twin::Colorimeter* colorimeter, const DivergenceSettings& s);
 
 // D65 / 10° colorimeter on `grid`, or null when the grid cannot carry colour.
 std::shared_ptr<const twin::Colorimeter> colorimeter_for(const WavelengthGrid& grid);
-
-// m of the last n.
-class SustainedWindow {
- public:
-  SustainedWindow(int m, int n) : m_(m), n_(n) {}
-  // Records a point; true when the window now holds at least m diverged points.
-  bool push(bool diverged);
-  int diverged_in_window() const noexcept { return count_; }
-  void clear() {
-    window_.clear();
-    count_ = 0;
-  }
-
- private:
-  int m_, n_;
-  std::deque<bool> window_;
-  int count_ = 0;
-};
 
 // Relative drift |current / baseline − 1| of the channel-mean reference signal; nullopt
 // when the baseline is not positive.

@@ -110,8 +110,9 @@ class Instrument {
   void set_status_listener(std::function<void(const std::string&)> f) {
     status_listener_ = std::move(f);
   }
-  // Called from the runner thread with (scan, alert) when a sustained-divergence alert is
-  // raised (the diagnosis); must return at once. Set before start().
+  // Called from the runner thread with (scan, alert) when a scan ends with a verdict that
+  // raised the sustained-divergence alert and names a cause (the diagnosis refits it); must
+  // return at once. Set before start().
   void set_sustained_listener(std::function<void(std::int64_t, std::int64_t)> f) {
     sustained_listener_ = std::move(f);
   }
@@ -172,6 +173,9 @@ class Instrument {
   void beat();
   nlohmann::json positions_json() const;
   void publish_progress();
+  // The scan's verdict from every point so far: stored when it changes, the sustained
+  // divergence alert raised or updated, a calibration hint at the end (`final`).
+  void judge_scan(std::int64_t point_index, bool final);
 
   const Config& config_;
   Store& store_;

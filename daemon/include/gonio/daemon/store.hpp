@@ -59,7 +59,7 @@ struct AlertDraft {
 struct StoredFit {
   std::int64_t id = 0;
   std::int64_t scan_id = 0;
-  std::string kind;   // "fit" or "calibrate"
+  std::string kind;   // "fit", "calibrate", "diagnosis" or "verdict" (the scan's, verdict.hpp)
   std::string model;  // the model spec (fit) or the known sample's spec (calibrate)
   std::string created_by, created_at;
   nlohmann::json result;  // gonio::twin::FitResult::to_json()
@@ -188,8 +188,10 @@ class Store {
   // ---- fits and profiles
   StoredFit insert_fit(std::int64_t scan_id, const std::string& kind, const std::string& model,
                        const nlohmann::json& result, const std::string& actor);
-  // The scan's fits, newest first.
+  // The scan's fits, newest first (its verdicts are not fits: latest_fit(id, "verdict")).
   std::vector<StoredFit> fits(std::int64_t scan_id, std::size_t limit) const;
+  // The newest record of `kind` ("verdict", "diagnosis", ...) of a scan.
+  std::optional<StoredFit> latest_fit(std::int64_t scan_id, const std::string& kind) const;
   // Stores `profile` as the next version (audited).
   StoredProfile insert_profile(const std::string& name, const nlohmann::json& profile,
                                std::optional<std::int64_t> scan_id,

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "gonio/daemon/config.hpp"
+#include "gonio/daemon/scan_twin.hpp"
 #include "gonio/proto/geometry.hpp"
 #include "gonio/twin/instrument.hpp"
 #include "gonio/twin/twin.hpp"
@@ -69,26 +70,27 @@ class TwinService {
    public:
     // Blocks until the prediction of geometry `i` is ready (rethrows its error). Moves the
     // look-ahead window forward and frees earlier predictions.
-    twin::Prediction wait(std::size_t i);
+    ScanTwin::PointPrediction wait(std::size_t i);
     void cancel();
     ~Batch();
 
    private:
     friend class TwinService;
     struct State;
-    Batch(TwinService& pool, std::shared_ptr<const twin::Twin> twin, std::vector<Geometry> geoms,
+    Batch(TwinService& pool, std::shared_ptr<const ScanTwin> twin, std::vector<Geometry> geoms,
           std::size_t first, std::size_t window);
     void submit_upto(std::size_t end);  // caller holds state_->mu
 
     TwinService& pool_;
-    std::shared_ptr<const twin::Twin> twin_;
+    std::shared_ptr<const ScanTwin> twin_;
     std::vector<Geometry> geometries_;
     std::size_t window_;
     std::shared_ptr<State> state_;  // shared with queued tasks, which may outlive the batch
   };
 
-  // Starts predicting geometries from index `first` on.
-  std::shared_ptr<Batch> batch(std::shared_ptr<const twin::Twin> twin, std::vector<Geometry> geometries,
+  // Starts predicting geometries from index `first` on: each prediction with its budget and
+  // the sample's sensitivities (ScanTwin).
+  std::shared_ptr<Batch> batch(std::shared_ptr<const ScanTwin> twin, std::vector<Geometry> geometries,
                                std::size_t first = 0, std::size_t window = 0);
 
   // Predicts every geometry (blocking; uses the pool). Results in order.

@@ -1,0 +1,123 @@
+// ScanEvidence — the whole scan as evidence (docs/architecture.md §6, docs/decision-rule.md).
+//
+// A consistent small shift is invisible per point and obvious over a scan. Every point adds
+// its residuals r = m − p per channel, weighted by 1/v with v = u_m² + s_p² + the budget's
+// random components (repeatability, lamp), and the columns of a linear model of what could
+// have caused them: the instrument's systematic inputs (arm offsets, aperture scales, the
+// white's gain: the budget's sensitivities) and each numeric parameter of the sample's
+// catalogued BSDF (ScanTwin's sensitivities). The normal equations are accumulated, so a
+// verdict after each point costs a few small solves.
+//
+// An arm offset enters with its curvature (β at a glossy peak is not linear over a degree):
+// the fits are Gauss–Newton iterations, each a small solve.
+//
+// Hypotheses, each a generalised least-squares fit with the instrument's inputs held to
+// their datasheet priors (N(0, u²), and within ±the stated limit for a rectangular one):
+//   H0            the sample as catalogued, the instrument within its datasheet;
+//   instrument j  input j free (its prior dropped);
+//   sample k      parameter k free.
+// The best candidate must improve χ² on H0 by kSignificant to be evidence at all, and beat
+// the next by kTie to be named. Then:
+//   instrument j, |θ̂| − k·u > its datasheet limit       instrument_out_of_spec
+//   sample k, its effect on β judged point by point     out_of_tolerance / agrees / undecided
+//   nothing significant (or an in-spec instrument input)  the per-band mean relative difference
+//                 with its uncertainty (random and systematic) judged against the tolerance
+// A candidate whose fitted change lies beyond the range where its linearisation holds (a few
+// finite-difference steps; a sample parameter that would change sign or more than double) is
+// not evidence. Fewer points than twice the candidates: the per-band test alone, never a
+// cause; fewer than three: undecided.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "gonio/proto/point.hpp"
+
+namespace gonio::daemon {
+
+struct VerdictCause {
+  std::string kind;       // "sample" or "instrument"
+  std::string parameter;  // "conductor.alpha", "receive_arm_deg", "gain", ...
+  double value = 0, u = 0, nominal = 0;
+};
+
+struct ScanVerdict {
+  std::string decision = "undecided";  // agrees | out_of_tolerance | undecided | instrument_out_of_spec
+  std::string summary;
+  std::optional<VerdictCause> cause;
+  std::optional<VerdictCause> calibration_hint;  // an in-spec instrument input worth calibrating
+  double chi2_per_dof = 0;
+  std::size_t points_used = 0;
+  double delta_chi2_next = 0;          // how much better the named cause fits than the next
+  std::vector<VerdictCause> alike;     // candidates as good (a tie)
+  struct Candidate {
+    VerdictCause cause;
+    double delta_chi2 = 0;  // χ² of H0 minus the candidate's
+  };
+  std::vector<Candidate> candidates;   // every candidate within its linear range, best first
+
+  bool alerts() const { return decision == "out_of_tolerance" || decision == "instrument_out_of_spec"; }
+  nlohmann::json to_json() const;
+};
+
+class ScanEvidence {
+ public:
+  // Δχ² for a candidate to count, and for it to be told from the next (one parameter:
+  // 25 ≈ 5σ; 9 ≈ 3σ).
+  static constexpr double kSignificant = 25.0;
+  static constexpr double kTie = 9.0;
+
+  ScanEvidence(double tolerance, double coverage_k) : tolerance_(tolerance), k_(coverage_k) {}
+
+  // Adds a point with its prediction, budget and sample sensitivities (others are skipped).
+  void add(const PointRecord& p);
+  std::size_t points() const noexcept { return points_.size(); }
+  std::size_t candidates() const noexcept { return names_.size(); }
+
+  ScanVerdict verdict() const;
+
+ private:
+  struct Column {
+    std::string name, kind, unit;
+    double prior_u = 0;   // 0: no prior (a sample parameter)
+    double limit = 0;     // datasheet limit (instrument)
+    double nominal = 0;
+    // How far the linear model is trusted: a fitted change beyond it is an extrapolation
+    // of a finite difference, not evidence (see verdict()).
+    double max_change = 0;
+    bool curved = false;  // the budget states ∂²β/∂x² (arm offsets): β = c1·θ + ½·c2·θ²
+    bool bounded = false; // rectangular or triangular: held within ±limit when not free
+  };
+  struct Point {
+    std::vector<double> p, r, v;                 // per channel
+    std::vector<std::vector<double>> columns;   // per column, per channel
+    std::vector<std::vector<double>> curvature; // per column (empty: linear), per channel
+  };
+  struct Fit {
+    std::vector<std::size_t> free;  // columns without prior
+    double chi2 = 0;
+    std::vector<double> theta, u;   // over all columns in the fit
+    std::vector<std::size_t> index;
+  };
+  Fit solve(const std::vector<std::size_t>& columns, const std::vector<std::size_t>& free) const;
+  void setup(const PointRecord& p);
+
+  double tolerance_, k_;
+  std::vector<Column> names_;
+  std::vector<Point> points_;
+  std::size_t channels_ = 0;
+  // The weighted Gram matrix G = Σ w e eᵀ of the extended columns e = (each column's
+  // sensitivity, the curvature of each curved one, the residual r), n residuals. Every fit's
+  // normal equations and χ² are quadratic forms in G, so a verdict costs a few small solves
+  // however many points are in.
+  std::vector<std::vector<double>> G_;
+  std::vector<std::size_t> curvature_of_;  // extended index of column j's curvature, or npos
+  std::size_t residual_ = 0;               // extended index of r
+  std::size_t n_ = 0;
+};
+
+}  // namespace gonio::daemon

@@ -1,0 +1,197 @@
+// The scan's verdict (verdict.hpp) on synthetic scans whose truth is known: points made from
+// a linear model of the instrument and the sample, with noise at the stated uncertainties.
+// And the spec handling the verdict and its diagnosis rest on (scan_twin.hpp, diagnosis.hpp).
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "gonio/daemon/diagnosis.hpp"
+#include "gonio/daemon/scan_twin.hpp"
+#include "gonio/daemon/verdict.hpp"
+
+namespace gonio::daemon {
+namespace {
+
+const auto kGrid = WavelengthGrid::parse("450,550,650");
+
+struct Truth {
+  double receive_offset = 0, gain = 0, albedo_600 = 0, alpha = 0;
+};
+
+// A scan of `n` points: β rises and falls with the point (a peak), the receive arm's
+// sensitivity is the slope of that curve, the white's is β, the albedo node's acts on the
+// red channel alone, the roughness's on the peak's shape.
+std::vector<PointRecord> scan(const Truth& t, int n, std::uint64_t seed, double u_rel = 0.002) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> gauss(0, 1);
+  std::vector<PointRecord> out;
+  for (int i = 0; i < n; ++i) {
+    const double x = -2 + 4.0 * i / (n - 1);
+    const double shape = 0.2 + std::exp(-x * x);
+    const double slope = -2 * x * std::exp(-x * x) * 0.5;   // ∂β/∂θr per degree
+    const double widen = (2 * x * x - 1) * std::exp(-x * x);  // ∂β/∂α (scaled)
+    std::vector<double> p, m, um, sp, srcv, sgain, salb, salpha, zero(3, 0.0);
+    for (std::size_t c = 0; c < 3; ++c) {
+      const double b = shape * (0.5 + 0.1 * static_cast<double>(c));
+      p.push_back(b);
+      srcv.push_back(slope * (0.5 + 0.1 * static_cast<double>(c)));
+      sgain.push_back(b);
+      salb.push_back(c == 2 ? b / 0.45 : 0.0);
+      salpha.push_back(widen * (0.5 + 0.1 * static_cast<double>(c)));
+      double mean = b + srcv.back() * t.receive_offset + b * t.gain + salb.back() * t.albedo_600 + salpha.back() * t.alpha;
+      const double u = u_rel * b;
+      um.push_back(u);
+      sp.push_back(0.5 * u);
+      m.push_back(mean + std::hypot(u, 0.5 * u) * gauss(rng));
+    }
+    PointRecord r;
+    r.index = i;
+    r.measured = Spectrum(kGrid, m, um);
+    r.predicted = Spectrum(kGrid, p, sp);
+    const double ua = 0.5 / std::sqrt(3.0);
+    r.budget = {
+        {"incidence_arm_deg", "rectangular", "deg", false, {ua}, zero, zero, {}},
+        {"receive_arm_deg", "rectangular", "deg", false, {ua}, srcv, zero, {}},
+        {"arm_repeatability_deg", "rectangular", "deg", true, {0.03}, zero, zero, {}},
+        {"source_aperture_rel", "rectangular", "1", false, {0.017}, zero, zero, {}},
+        {"receiver_aperture_rel", "rectangular", "1", false, {0.017}, zero, zero, {}},
+        {"reference_white_rel", "normal", "1", false, {0.003}, sgain, zero, {}},
+        {"lamp_stability_rel", "normal", "1", true, {0.001}, sgain, zero, {}},
+    };
+    r.sample_sensitivity = {{"lambert.albedo@600", 0.45, salb}, {"coat.alpha", 0.06, salpha}};
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+ScanVerdict judge(const std::vector<PointRecord>& points, double tol = 0.02) {
+  ScanEvidence e(tol, 2.0);
+  for (const auto& p : points) e.add(p);
+  return e.verdict();
+}
+
+TEST(Verdict, AnInSpecArmOffsetIsNoAlarmButACalibrationHint) {
+  int alarms = 0;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    const auto v = judge(scan({.receive_offset = 0.3}, 61, seed));
+    alarms += v.alerts() ? 1 : 0;
+    if (v.calibration_hint) {
+      EXPECT_NEAR(v.calibration_hint->value, 0.3, 0.05) << v.summary;
+    }
+    EXPECT_FALSE(v.cause.has_value()) << v.summary;
+  }
+  EXPECT_EQ(alarms, 0);
+}
+
+TEST(Verdict, AnAlbedoBandTwiceItsToleranceIsOutOfToleranceAndNamed) {
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    const auto v = judge(scan({.albedo_600 = 0.45 * 0.04}, 61, seed));
+    EXPECT_EQ(v.decision, "out_of_tolerance") << v.summary;
+    ASSERT_TRUE(v.cause.has_value()) << v.summary;
+    EXPECT_EQ(v.cause->kind, "sample");
+    EXPECT_EQ(v.cause->parameter, "lambert.albedo@600");
+    EXPECT_NEAR(v.cause->value, 0.45 * 1.04, 3 * v.cause->u + 1e-9);
+    EXPECT_NEAR(v.cause->nominal, 0.45, 1e-12);
+  }
+}
+
+TEST(Verdict, AnArmOffsetBeyondTheDatasheetIsTheInstrument) {
+  const auto v = judge(scan({.receive_offset = 1.5}, 61, 3));
+  EXPECT_EQ(v.decision, "instrument_out_of_spec") << v.summary;
+  ASSERT_TRUE(v.cause.has_value());
+  EXPECT_EQ(v.cause->parameter, "receive_arm_deg");
+  EXPECT_NEAR(v.cause->value, 1.5, 0.05);
+  const auto g = judge(scan({.gain = 0.05}, 61, 4));
+  EXPECT_EQ(g.decision, "instrument_out_of_spec") << g.summary;
+  ASSERT_TRUE(g.cause.has_value());
+  EXPECT_EQ(g.cause->parameter, "gain");
+  EXPECT_NEAR(g.cause->value, 1.05, 0.005);
+}
+
+TEST(Verdict, NeverFromTheFirstPointsAlone) {
+  // Seven candidate causes: 14 points before a cause is named, however clear the first are;
+  // fewer than 3 points decide nothing at all.
+  const auto points = scan({.receive_offset = 1.5}, 61, 5);
+  ScanEvidence e(0.02, 2.0);
+  for (int i = 0; i < 13; ++i) {
+    e.add(points[static_cast<std::size_t>(i)]);
+    const auto v = e.verdict();
+    if (i < 2) {
+      EXPECT_EQ(v.decision, "undecided");
+    }
+    EXPECT_FALSE(v.cause.has_value()) << v.summary;
+  }
+  e.add(points[13]);
+  const auto v = e.verdict();
+  EXPECT_EQ(v.decision, "instrument_out_of_spec") << v.summary;
+  ASSERT_TRUE(v.cause.has_value()) << v.summary;
+  EXPECT_EQ(v.cause->parameter, "receive_arm_deg");
+}
+
+TEST(Verdict, AFarExtrapolationIsNoCause) {
+  // The roughness's column made the white's, a thousand times weaker: it fits a gain 30 %
+  // off as well as the gain does, but only with α changed by 300 — far outside where its
+  // finite difference means anything. Without the range it would tie with the gain.
+  auto points = scan({.gain = 0.3}, 61, 8);
+  for (auto& p : points) {
+    p.sample_sensitivity[1].sensitivity = p.budget[5].sensitivity;
+    for (auto& x : p.sample_sensitivity[1].sensitivity) x *= 1e-3;
+  }
+  const auto v = judge(points);
+  EXPECT_EQ(v.decision, "instrument_out_of_spec") << v.summary;
+  ASSERT_TRUE(v.cause.has_value()) << v.summary;
+  EXPECT_EQ(v.cause->parameter, "gain");
+}
+
+TEST(Verdict, CandidatesThePointsCannotTellApartNameNoCause) {
+  // The albedo node's column equals the white's on a one-channel grid: a tie.
+  auto points = scan({.gain = 0.05}, 61, 6);
+  for (auto& p : points) p.sample_sensitivity[0].sensitivity = p.budget[5].sensitivity;
+  const auto v = judge(points);
+  EXPECT_FALSE(v.cause.has_value()) << v.summary;
+  EXPECT_GE(v.alike.size(), 2u);
+  EXPECT_NE(v.summary.find("undetermined"), std::string::npos);
+}
+
+TEST(Verdict, AgreesWhenNothingDiffers) {
+  const auto v = judge(scan({}, 61, 8), 0.05);
+  EXPECT_EQ(v.decision, "agrees") << v.summary;
+  EXPECT_LT(v.chi2_per_dof, 2);
+  const auto j = v.to_json();
+  EXPECT_EQ(j["cause"], nullptr);
+  EXPECT_EQ(j["points_used"], 61);
+}
+
+TEST(SpecParameters, ScalarsAndSpectralNodesWithTheirPlaceInTheText) {
+  const std::string spec = "lambert:albedo=400:0.06,500:0.12,600:0.45+coat:alpha=0.06,ior=1.5";
+  const auto ps = spec_parameters(spec);
+  ASSERT_EQ(ps.size(), 5u);
+  EXPECT_EQ(ps[0].name, "lambert.albedo@400");
+  EXPECT_EQ(ps[2].name, "lambert.albedo@600");
+  EXPECT_DOUBLE_EQ(ps[2].value, 0.45);
+  EXPECT_EQ(ps[3].name, "coat.alpha");
+  EXPECT_EQ(ps[4].name, "coat.ior");
+  EXPECT_EQ(ps[2].with(spec, 0.468), "lambert:albedo=400:0.06,500:0.12,600:0.468+coat:alpha=0.06,ior=1.5");
+  EXPECT_EQ(fit_template(spec, "coat.alpha"), "lambert:albedo=400:0.06,500:0.12,600:0.45+coat:alpha=?0.06,ior=1.5");
+  EXPECT_EQ(fit_template(spec, "lambert.albedo@500"), "lambert:albedo=400:0.06,500:?0.12,600:0.45+coat:alpha=0.06,ior=1.5");
+  EXPECT_FALSE(fit_template(spec, "coat.eta").has_value());
+  EXPECT_EQ(spec_parameters("conductor:alpha=0.05,eta=0.2,k=3.9").size(), 3u);
+  EXPECT_TRUE(spec_parameters("mirror").empty());
+}
+
+TEST(Diagnosis, InstrumentInputsMapToCalibrateParameters) {
+  EXPECT_EQ(calibration_parameter("receive_arm_deg"), "receive_offset_deg");
+  EXPECT_EQ(calibration_parameter("incidence_arm_deg"), "incidence_offset_deg");
+  EXPECT_EQ(calibration_parameter("gain"), "gain");
+  EXPECT_EQ(calibration_parameter("source_aperture_rel"), "source_aperture_scale");
+  EXPECT_FALSE(calibration_parameter("coat.alpha").has_value());
+  for (const char* p : {"receive_arm_deg", "incidence_arm_deg", "gain", "source_aperture_rel", "receiver_aperture_rel"}) {
+    const auto& names = twin::calibration_parameters();
+    EXPECT_NE(std::find(names.begin(), names.end(), *calibration_parameter(p)), names.end()) << p;
+  }
+}
+
+}  // namespace
+}  // namespace gonio::daemon
