@@ -121,7 +121,8 @@ std::vector<BudgetEntry> budget_entries(const twin::Budget& b) {
                                                                           : "normal";
     const bool curved = !c.random && std::any_of(c.curvature.begin(), c.curvature.end(), [](double v) { return v != 0; });
     out.push_back(BudgetEntry{c.name, dist, c.unit, c.random, rounded(c.u), rounded(c.sensitivity),
-                              rounded(c.contribution), curved ? rounded(c.curvature) : std::vector<double>{}});
+                              rounded(c.contribution), curved ? rounded(c.curvature) : std::vector<double>{},
+                              c.cross.empty() ? std::string() : c.cross_with, rounded(c.cross)});
   }
   return out;
 }

@@ -33,6 +33,7 @@ void to_json(nlohmann::json& j, const BudgetEntry& b) {
                      {"u", compact(b.u)},              {"sensitivity", b.sensitivity},
                      {"contribution", b.contribution}};
   if (!b.curvature.empty()) j["curvature"] = b.curvature;
+  if (!b.cross.empty()) j["cross"] = nlohmann::json{{"with", b.cross_with}, {"values", b.cross}};
 }
 
 void from_json(const nlohmann::json& j, BudgetEntry& b) {
@@ -47,6 +48,12 @@ void from_json(const nlohmann::json& j, BudgetEntry& b) {
   b.sensitivity = r.required<std::vector<double>>("sensitivity");
   b.contribution = r.required<std::vector<double>>("contribution");
   b.curvature = r.optional<std::vector<double>>("curvature", {});
+  if (const auto* x = r.raw("cross"); x && !x->is_null()) {
+    json_util::ObjectReader xr(*x, r.path("cross"));
+    b.cross_with = xr.required<std::string>("with");
+    b.cross = xr.required<std::vector<double>>("values");
+    xr.finish();
+  }
   r.finish();
 }
 

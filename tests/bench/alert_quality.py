@@ -6,8 +6,8 @@ directory and mock lab, the hidden truth drawn per scan), and reports per scenar
 the sustained divergence alert fired and whether the verdict named the true cause:
 
   in spec         the sample is what the catalogue says, the instrument within its data
-                  sheet (arm offsets drawn within ±0.45°, repeatability ±0.05°): every
-                  alert is a false alarm
+                  sheet (arm offsets drawn within ±0.45°, repeatability ±0.05°, the
+                  white's gain within its certificate): every alert is a false alarm
   out of tolerance  the sample differs by about twice its tolerance or more: roughness
                   +10 %, one albedo band +4 % (tolerance 2 %), a coat's IOR 1.5 -> 1.6
   out of spec     the instrument is outside its data sheet: receive arm 1.5° off, the
@@ -54,6 +54,8 @@ def lab_keys(kind, rng):
     if kind == "offsets":
         keys.append("arm_offsets_deg = {{ incidence = {:.3f}, receive = {:.3f} }}".format(
             rng.uniform(-0.45, 0.45), rng.uniform(-0.45, 0.45)))
+        # the white's true value within its certificate (u = 0.3 % from 500 nm)
+        keys.append("gain = {:.5f}".format(rng.gauss(1.0, 0.003)))
     elif kind.startswith("receive="):
         keys.append("arm_offsets_deg = {{ receive = {} }}".format(kind.split("=")[1]))
     elif kind.startswith("gain="):
@@ -124,7 +126,8 @@ def run_scan(binary, scenario, rng, wavelengths):
                     "diverged_points": st["points_diverged"], "alert": bool(sustained),
                     "decision": verdict.get("decision"), "cause": cause, "expected": expected,
                     "correct": expected is not None and cause == expected, "seconds": seconds,
-                    "summary": verdict.get("summary", "")}
+                    "summary": verdict.get("summary", ""),
+                    "alert_message": sustained[0]["message"] if sustained else None}
         finally:
             proc.send_signal(signal.SIGKILL)
             proc.wait()

@@ -120,7 +120,7 @@ TEST(Divergence, ACorrelatedBudgetComponentMovesTheColourLessThanIndependentNois
   const auto cm = colorimeter_for(grid);
   std::vector<double> p(grid.size(), 3.0);
   const std::vector<double> tiny(grid.size(), 1e-6);
-  BudgetEntry gain{"reference_white_rel", "normal", "1", false, {0.01}, p, std::vector<double>(grid.size(), 0.03), {}};
+  BudgetEntry gain{"reference_white_rel", "normal", "1", false, {0.01}, p, std::vector<double>(grid.size(), 0.03), {}, {}, {}};
   DivergenceSettings s;
   const auto d = evaluate_point(Spectrum(grid, p, tiny), Spectrum(grid, p, tiny), std::vector<double>(grid.size(), 0.03),
                                 {gain}, 0.02, cm.get(), s);

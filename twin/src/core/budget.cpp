@@ -47,7 +47,7 @@ std::vector<Twin> make_variants(const Twin& twin) {
   const double hs = step_of(p.tolerances.source_aperture_rel);
   const double hd = step_of(p.tolerances.receiver_aperture_rel);
   std::vector<Twin> v;
-  v.reserve(7);
+  v.reserve(8);
   v.push_back(twin);
   v.push_back(twin.with_profile(offset(p, hi, 0)));
   v.push_back(twin.with_profile(offset(p, -hi, 0)));
@@ -55,6 +55,7 @@ std::vector<Twin> make_variants(const Twin& twin) {
   v.push_back(twin.with_profile(offset(p, 0, -hr)));
   v.push_back(twin.with_profile(scale_apertures(p, 1 + hs, 1)));
   v.push_back(twin.with_profile(scale_apertures(p, 1, 1 + hd)));
+  v.push_back(twin.with_profile(offset(p, hi, hr)));
   return v;
 }
 
@@ -104,7 +105,7 @@ Budget BudgetModel::evaluate(const Prediction& nominal, const EstimatorOptions& 
 
   const auto arm = [&](const char* name, const Tolerance& t, const std::vector<double>& plus,
                        const std::vector<double>& minus) {
-    BudgetComponent c{name, "deg", t.distribution, false, {}, {}, {}, {}};
+    BudgetComponent c{name, "deg", t.distribution, false, {}, {}, {}, {}, {}, {}};
     const double h = step_of(t), u = t.standard_uncertainty();
     for (std::size_t k = 0; k < C; ++k) {
       const double c1 = h > 0 ? (plus[k] - minus[k]) / (2 * h) : 0;
@@ -117,7 +118,7 @@ Budget BudgetModel::evaluate(const Prediction& nominal, const EstimatorOptions& 
     return c;
   };
   const auto aperture = [&](const char* name, const Tolerance& t, const std::vector<double>& plus) {
-    BudgetComponent c{name, "1", t.distribution, false, {}, {}, {}, {}};
+    BudgetComponent c{name, "1", t.distribution, false, {}, {}, {}, {}, {}, {}};
     const double h = step_of(t), u = t.standard_uncertainty();
     for (std::size_t k = 0; k < C; ++k) {
       const double c1 = h > 0 ? (plus[k] - b0[k]) / h : 0;
@@ -131,7 +132,7 @@ Budget BudgetModel::evaluate(const Prediction& nominal, const EstimatorOptions& 
   // β is proportional to the white's assigned value and inversely to the lamp's change
   // between the two readings: c = β (of the nominal prediction, the better estimate).
   const auto proportional = [&](const char* name, const Tolerance& t, bool random) {
-    BudgetComponent c{name, "1", t.distribution, random, {}, {}, {}, {}};
+    BudgetComponent c{name, "1", t.distribution, random, {}, {}, {}, {}, {}, {}};
     for (std::size_t k = 0; k < C; ++k) {
       const double u = t.standard_uncertainty(grid[k]);
       c.u.push_back(u);
@@ -145,11 +146,24 @@ Budget BudgetModel::evaluate(const Prediction& nominal, const EstimatorOptions& 
   b.components.push_back(arm("incidence_arm_deg", incidence_, beta[1], beta[2]));
   b.components.push_back(arm("receive_arm_deg", receive_, beta[3], beta[4]));
   {
+    // The arms' interaction, (β(+,+) − β(+,0) − β(0,+) + β)/(h_i h_r), and its term of the
+    // budget, c_ir² u_i² u_r² (GUM, JCGM 100:2008 §5.1.2, note).
+    auto& rc = b.components[1];
+    const double hi = step_of(incidence_), hr = step_of(receive_);
+    const double ui = incidence_.standard_uncertainty(), ur = receive_.standard_uncertainty();
+    rc.cross_with = "incidence_arm_deg";
+    for (std::size_t k = 0; k < C; ++k) {
+      const double cx = hi > 0 && hr > 0 ? (beta[7][k] - beta[1][k] - beta[3][k] + b0[k]) / (hi * hr) : 0;
+      rc.cross.push_back(cx);
+      rc.contribution[k] = std::sqrt(rc.contribution[k] * rc.contribution[k] + cx * cx * ui * ui * ur * ur);
+    }
+  }
+  {
     // Each move lands within ±repeatability of where the arm's offset puts it: the same
     // sensitivities as the offsets, independent per arm and per point.
     const auto& t = profile.tolerances.arm_repeatability_deg;
     const double u = t.standard_uncertainty();
-    BudgetComponent c{"arm_repeatability_deg", "deg", t.distribution, true, {}, {}, {}, {}};
+    BudgetComponent c{"arm_repeatability_deg", "deg", t.distribution, true, {}, {}, {}, {}, {}, {}};
     const auto& ci = b.components[0];
     const auto& cr = b.components[1];
     for (std::size_t k = 0; k < C; ++k) {

@@ -8,13 +8,15 @@
 // catalogued BSDF (ScanTwin's sensitivities). The normal equations are accumulated, so a
 // verdict after each point costs a few small solves.
 //
-// An arm offset enters with its curvature (β at a glossy peak is not linear over a degree):
+// An arm offset enters with its curvature and the arms' interaction (β at a glossy peak is
+// not linear over a degree):
 // the fits are Gauss–Newton iterations, each a small solve.
 //
 // Hypotheses, each a generalised least-squares fit with the instrument's inputs held to
 // their datasheet priors (N(0, u²), and within ±the stated limit for a rectangular one):
 //   H0            the sample as catalogued, the instrument within its datasheet;
-//   instrument j  input j free (its prior dropped);
+//   instrument j  arm offset or white gain j free (its prior dropped; the apertures are
+//                 always held to theirs);
 //   sample k      parameter k free.
 // The best candidate must improve χ² on H0 by kSignificant to be evidence at all, and beat
 // the next by kTie to be named. Then:
@@ -76,7 +78,7 @@ class ScanEvidence {
   // Adds a point with its prediction, budget and sample sensitivities (others are skipped).
   void add(const PointRecord& p);
   std::size_t points() const noexcept { return points_.size(); }
-  std::size_t candidates() const noexcept { return names_.size(); }
+  std::size_t candidates() const noexcept;  // candidate causes (arms, white, sample parameters)
 
   ScanVerdict verdict() const;
 
@@ -96,6 +98,7 @@ class ScanEvidence {
     std::vector<double> p, r, v;                 // per channel
     std::vector<std::vector<double>> columns;   // per column, per channel
     std::vector<std::vector<double>> curvature; // per column (empty: linear), per channel
+    std::vector<std::vector<double>> cross;     // per column with a partner, per channel
   };
   struct Fit {
     std::vector<std::size_t> free;  // columns without prior
@@ -104,6 +107,7 @@ class ScanEvidence {
     std::vector<std::size_t> index;
   };
   Fit solve(const std::vector<std::size_t>& columns, const std::vector<std::size_t>& free) const;
+  bool is_candidate(std::size_t column) const;
   void setup(const PointRecord& p);
 
   double tolerance_, k_;
@@ -116,6 +120,8 @@ class ScanEvidence {
   // however many points are in.
   std::vector<std::vector<double>> G_;
   std::vector<std::size_t> curvature_of_;  // extended index of column j's curvature, or npos
+  std::vector<std::size_t> cross_of_;      // extended index of column j's interaction, or npos
+  std::vector<std::size_t> partner_;       // the column j interacts with (β += c·θ_j·θ_partner)
   std::size_t residual_ = 0;               // extended index of r
   std::size_t n_ = 0;
 };

@@ -32,6 +32,10 @@ struct BudgetEntry {
   // ∂²β/∂x² per channel where β is curved in the input (the arms at a glossy peak); empty
   // where β is linear in it. The verdict's fit uses it for offsets beyond a step.
   std::vector<double> curvature;
+  // ∂²β/∂x∂y with the input named `cross_with` (the receive arm's entry: the arms'
+  // interaction); empty when none. JSON: "cross": {"with": ..., "values": [...]}.
+  std::string cross_with;
+  std::vector<double> cross;
   friend bool operator==(const BudgetEntry&, const BudgetEntry&) = default;
 };
 

@@ -62,6 +62,11 @@ TEST_P(ArmsAgainstMonteCarlo, CombinedArmContributionMatchesTheSpreadOfDrawnOffs
     beta.push_back(twin.with_profile(p).predict(g, mc).beta[k]);
   }
   const double observed = stddev(beta);
+  if (observed < 1e-9 * nominal.beta[k]) {
+    // A Lambertian sample read against the white at each geometry: the arms cancel out.
+    EXPECT_LT(predicted, 1e-9 * nominal.beta[k]) << spec << " at " << g.to_string();
+    return;
+  }
   // 96 draws give the spread to about ±8 % (1σ); the quadratic model of the budget is exact
   // only for a quadratic β, so allow ±35 %.
   EXPECT_GT(predicted, 0.65 * observed) << spec << " at " << g.to_string();
@@ -110,8 +115,9 @@ TEST(Budget, CostsAtMostThreePlainPredictions) {
   options.rel_se = 2e-3;
   const auto nominal = twin.predict(Geometry::in_plane(45, 40), options);
   const auto b = BudgetModel(twin).evaluate(nominal, options);
-  // Counted in paths, not seconds: 7 variants at a quarter of the nominal's paths each.
-  EXPECT_LE(b.samples, 2 * nominal.samples + 7 * 1024);
+  // Counted in paths, not seconds: 8 variants at a quarter of the nominal's paths each, so
+  // a prediction with its budget costs at most 3 plain ones.
+  EXPECT_LE(b.samples, 2 * nominal.samples + 8 * 1024);
 }
 
 TEST(Tolerances, ParsedStrictlyAndRoundTrip) {

@@ -41,6 +41,10 @@ struct BudgetComponent {
   std::vector<double> u;              // standard uncertainty of the input, per channel
   std::vector<double> sensitivity;    // ∂β/∂x per channel
   std::vector<double> curvature;      // ∂²β/∂x² per channel (0: taken as linear)
+  // ∂²β/∂x∂y with the input `cross_with` (the receive arm's row carries the arms'
+  // interaction, which moves a glossy peak's shoulders by a percent or two at ±0.4° each).
+  std::string cross_with;
+  std::vector<double> cross;
   std::vector<double> contribution;   // standard uncertainty of β it causes, per channel
 };
 
@@ -75,7 +79,7 @@ class BudgetModel {
  private:
   const InstrumentProfile& nominal_profile() const noexcept { return variants_.front().profile(); }
 
-  std::vector<Twin> variants_;  // nominal, incidence ±, receive ±, source +, receiver +
+  std::vector<Twin> variants_;  // nominal, incidence ±, receive ±, source +, receiver +, both arms +
   Tolerance incidence_, receive_;
 };
 
