@@ -56,14 +56,16 @@ const NAV_OF = { scan: 'scans', compare: 'scans', sample: 'samples' };
 function useRoute() {
   const [route, setRoute] = useState(() => parseRoute(location.hash));
   useEffect(() => {
-    const on = () => setRoute(parseRoute(location.hash));
+    const on = () => setRoute((cur) => (routeHash(cur) === routeHash(parseRoute(location.hash)) ? cur : parseRoute(location.hash)));
     addEventListener('hashchange', on);
     return () => removeEventListener('hashchange', on);
   }, []);
+  // The view changes at once (as a click expects), and the hash follows (its hashchange
+  // gives the same route again).
   const navigate = useCallback((r) => {
     const h = routeHash(r);
-    if (location.hash !== h) location.hash = h; // → hashchange → setRoute
-    else setRoute(parseRoute(h));
+    setRoute((cur) => (routeHash(cur) === h ? cur : parseRoute(h)));
+    if (location.hash !== h) location.hash = h;
   }, []);
   return [route, navigate];
 }
