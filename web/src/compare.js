@@ -3,13 +3,13 @@
 // against each other — and each one's difference to the first.
 import { useEffect, useState } from 'preact/hooks';
 import { html, PlotHost } from './ui.js';
-import { MAX_COMPARE, channelOf, compareColumns, diffStats, fmt, incidences, shortTime } from './logic.js';
+import { POINTS_PAGE, MAX_COMPARE, channelOf, compareColumns, diffStats, fmt, incidences, shortTime } from './logic.js';
 import { overlayPlot, SERIES_COLOURS } from './plot.js';
 
 async function allPoints(call, scan) {
   const out = [];
   for (let offset = 0; ;) {
-    const page = await call('scan.points', { scan, offset, limit: 1000 });
+    const page = await call('scan.points', { scan, offset, limit: POINTS_PAGE });
     out.push(...page.points);
     if (page.next_offset == null || page.points.length === 0) return out;
     offset = page.next_offset;

@@ -47,6 +47,10 @@ export function submitParams(form) {
   return p;
 }
 
+// Points per scan.points call: a point with its budget and sensitivities is ~9 kB of JSON
+// at 31 channels, so 1,000 of them would pass goniod's 8 MiB response limit.
+export const POINTS_PAGE = 250;
+
 // Index of the channel nearest to `nm` (wavelength grids are increasing).
 export function channelOf(wavelengths, nm) {
   if (!wavelengths || wavelengths.length === 0) return -1;

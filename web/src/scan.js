@@ -3,7 +3,7 @@
 // clicked point's spectra and colours, and the exports.
 import { useEffect, useMemo, useRef, useState } from 'preact/hooks';
 import { html, download } from './ui.js';
-import { Curve, budgetRows, channelOf, coalesce, exportFile, fmt, incidences, verdictBadge } from './logic.js';
+import { POINTS_PAGE, Curve, budgetRows, channelOf, coalesce, exportFile, fmt, incidences, verdictBadge } from './logic.js';
 import { betaPlot, betaData, lanePlot, laneData, spectrumPlot } from './plot.js';
 import { colourOf } from './colour.js';
 import tables from 'virtual:colour-tables';
@@ -113,7 +113,7 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify, fitted = null
         setNm((cur) => wl[channelOf(wl, cur)]);
         let offset = 0;
         for (;;) {
-          const page = await call('scan.points', { scan: scanId, offset, limit: 1000 });
+          const page = await call('scan.points', { scan: scanId, offset, limit: POINTS_PAGE });
           if (gone) return;
           for (const p of page.points) if (!points.has(p.index)) points.set(p.index, p);
           if (page.next_offset == null || page.points.length === 0) break;
