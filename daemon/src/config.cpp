@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -306,6 +307,20 @@ std::string redact_conninfo(const std::string& conninfo) {
 
 std::string default_web_root() { return GONIO_WEB_ROOT; }
 
+std::string web_root_beside(std::string_view exe) {
+  namespace fs = std::filesystem;
+  if (exe.empty()) return {};
+  const auto dir = (fs::path(exe).parent_path() / ".." / "web" / "dist").lexically_normal();
+  std::error_code ec;
+  return fs::is_regular_file(dir / "index.html", ec) ? dir.string() : std::string();
+}
+
+std::string Config::served_web_root(std::string_view exe) const {
+  if (web_root_set) return web_root;
+  auto beside = web_root_beside(exe);
+  return beside.empty() ? web_root : beside;
+}
+
 json Config::to_json() const {
   json listen_uris = json::array();
   for (const auto& u : listen) listen_uris.push_back(u.to_string());
@@ -437,6 +452,7 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
         c.allowed_origins.push_back(std::move(origin));
       }
     }
+    c.web_root_set = c.web_root_set || r.has("web_root");
     c.web_root = r.optional<std::string>("web_root", c.web_root);
     if (!c.web_root.empty() && c.web_root.front() != '/')
       throw Error::invalid("server.web_root", fmt::format("'{}' must be an absolute path (or empty: no dashboard)", c.web_root));

@@ -294,12 +294,16 @@ int run_daemon(const DaemonOptions& o) {
     register_methods(dispatcher, services);
 
     // ---- listeners: the state dir's socket always, then the configured ones.
-    auto web = std::make_shared<const WebRoot>(
-        config.web_root.empty() ? WebRoot{} : WebRoot::load(config.web_root));
+    // Unless server.web_root is set, a build tree's goniod serves the tree's own dashboard
+    // (<build>/web/dist, beside bin/) before the installed one.
+    std::error_code exe_ec;
+    const auto web_root = config.served_web_root(fs::read_symlink("/proc/self/exe", exe_ec).string());
+    auto web = std::make_shared<const WebRoot>(web_root.empty() ? WebRoot{} : WebRoot::load(web_root));
+    const char* why = config.web_root_set ? "server.web_root" : web_root != config.web_root ? "beside goniod" : "the installed one";
     if (web->empty())
-      spdlog::info("no dashboard: {} holds no files", config.web_root.empty() ? "server.web_root" : config.web_root);
+      spdlog::info("no dashboard: {} holds no files", web_root.empty() ? "server.web_root" : web_root);
     else
-      spdlog::info("dashboard: {} files from {}", web->size(), config.web_root);
+      spdlog::info("dashboard: {} files from {} ({})", web->size(), web_root, why);
     const net::Context ctx{dispatcher, hub, auth, net::Limits::from(config), net_stats, web};
     auto uris = config.listen;
     const auto default_sock = (state / "goniod.sock").string();

@@ -550,10 +550,14 @@ std::optional<std::pair<std::size_t, std::size_t>> Store::scan_progress(std::int
 std::vector<Scan> Store::scans(const ScanFilter& f) const {
   auto c = read();
   Stmt s(*c, fmt::format("SELECT {} FROM scans WHERE (?1 IS NULL OR state = ?1) AND "
-                         "(?2 IS NULL OR sample_id = ?2) ORDER BY id DESC LIMIT ?3 OFFSET ?4",
+                         "(?2 IS NULL OR sample_id = ?2) AND (?5 IS NULL OR submitted_at >= ?5) AND "
+                         "(?6 IS NULL OR submitted_at < ?6) AND (?7 IS NULL OR "
+                         "instr(lower(coalesce(json_extract(plan, '$.name'), '')), lower(?7)) > 0) "
+                         "ORDER BY id DESC LIMIT ?3 OFFSET ?4",
                          kScanColumns));
   if (f.state) s.bind(1, std::string(to_text(*f.state)));
   s.bind(2, f.sample_id).bind(3, f.limit).bind(4, f.offset);
+  s.bind(5, f.since).bind(6, f.until).bind(7, f.text);
   std::vector<Scan> out;
   while (s.step()) out.push_back(read_scan(s));
   return out;

@@ -47,6 +47,10 @@ export function submitParams(form) {
   return p;
 }
 
+// Points per scan.points call: a point with its budget and sensitivities is ~9 kB of JSON
+// at 31 channels, so 1,000 of them would pass goniod's 8 MiB response limit.
+export const POINTS_PAGE = 250;
+
 // Index of the channel nearest to `nm` (wavelength grids are increasing).
 export function channelOf(wavelengths, nm) {
   if (!wavelengths || wavelengths.length === 0) return -1;
@@ -124,7 +128,7 @@ export function unacknowledged(alerts) {
 // What a role may do; the server enforces the same (the method table), the UI only hides.
 const rank = { none: 0, viewer: 1, technician: 2, admin: 3 };
 export function can(role, action) {
-  const need = { control: 'technician', submit: 'technician', ack: 'technician', predict: 'technician', create: 'technician' }[action] || 'viewer';
+  const need = { control: 'technician', submit: 'technician', ack: 'technician', predict: 'technician', create: 'technician', fit: 'technician', calibrate: 'admin' }[action] || 'viewer';
   return (rank[role] || 0) >= rank[need];
 }
 
@@ -187,4 +191,194 @@ export function fmt(v, digits = 4) {
   let s = v.toPrecision(digits);
   if (s.includes('.') && !s.includes('e')) s = s.replace(/0+$/, '').replace(/\.$/, '');
   return s;
+}
+
+// ---- routes: the view in the URL's hash, so a link opens the same view after a reload or a
+// login ("#/scan/12", "#/sample/3", "#/scans?state=completed&text=gloss", "#/compare/4,7").
+export const VIEW_NAMES = ['run', 'scans', 'scan', 'compare', 'alerts', 'samples', 'sample', 'twin'];
+
+export function parseRoute(hash) {
+  const h = String(hash || '').replace(/^#\/?/, '');
+  const [path, query = ''] = h.split('?');
+  const [view, arg] = path.split('/');
+  const params = Object.fromEntries(new URLSearchParams(query));
+  const id = (s) => (/^[1-9]\d{0,15}$/.test(s || '') ? Number(s) : null);
+  switch (view) {
+    case 'scan': case 'sample': {
+      const n = id(arg);
+      return n ? { view, id: n, params } : { view: view === 'scan' ? 'scans' : 'samples', params: {} };
+    }
+    case 'compare': {
+      const ids = [...new Set(String(arg || '').split(',').map(id).filter(Boolean))].slice(0, MAX_COMPARE);
+      return { view, ids, params };
+    }
+    case 'scans': case 'alerts': case 'samples': case 'twin': case 'run':
+      return { view, params };
+    default: return { view: 'run', params: {} };
+  }
+}
+
+export function routeHash(route) {
+  const q = new URLSearchParams(Object.entries(route.params || {}).filter(([, v]) => v !== '' && v != null)).toString();
+  let path = route.view;
+  if (route.view === 'scan' || route.view === 'sample') path += `/${route.id}`;
+  else if (route.view === 'compare') path += `/${(route.ids || []).join(',')}`;
+  return `#/${path}${q ? `?${q}` : ''}`;
+}
+
+// ---- the scans' history -------------------------------------------------------------------
+export const HISTORY_PAGE = 25;
+export const SCAN_STATES = ['queued', 'running', 'paused', 'interrupted', 'completed', 'failed', 'cancelled'];
+
+// scan.list params from the history's filters (the route's params: sample, state, from, to
+// (days, YYYY-MM-DD, both included), text, page (1-based)). One row more than a page is asked
+// for: its presence says there is a next page.
+export function historyQuery(f = {}) {
+  const p = { limit: HISTORY_PAGE + 1, offset: HISTORY_PAGE * Math.max(0, (Number(f.page) || 1) - 1) };
+  if (f.sample) p.sample = /^\d+$/.test(f.sample) ? Number(f.sample) : f.sample;
+  if (f.state) p.state = f.state;
+  if (f.from) p.since = `${f.from}T00:00:00Z`;
+  if (f.to) p.until = `${nextDay(f.to)}T00:00:00Z`;
+  if (f.text && f.text.trim()) p.text = f.text.trim();
+  return p;
+}
+
+// The day after an ISO date (YYYY-MM-DD), in UTC; the text itself when it is not a date (goniod
+// then names the field).
+export function nextDay(day) {
+  if (!/^\d{4}-\d{2}-\d{2}$/.test(day)) return day;
+  const t = new Date(`${day}T00:00:00Z`);
+  if (Number.isNaN(t.getTime())) return day;
+  t.setUTCDate(t.getUTCDate() + 1);
+  return t.toISOString().slice(0, 10);
+}
+
+// The history's filter a scan.list error names (since → from, until → to).
+export function historyField(path) {
+  const f = formFieldOf(path);
+  return { since: 'from', until: 'to' }[f] || f;
+}
+
+export function shortTime(iso) {
+  return iso ? String(iso).replace('T', ' ').replace(/(:\d\d)\.\d+Z$/, '$1Z') : '–';
+}
+
+// States a scan is over in: they can be fitted, compared and are not live.
+export function finished(state) {
+  return state === 'completed' || state === 'failed' || state === 'cancelled';
+}
+
+// ---- verdicts and budgets -----------------------------------------------------------------
+const VERDICT_TEXT = {
+  agrees: 'agrees with its twin',
+  out_of_tolerance: 'out of tolerance',
+  instrument_out_of_spec: 'instrument out of spec',
+  undecided: 'undecided',
+};
+// The badge for a scan's verdict (scan.get `verdict`; null before its first predicted point).
+export function verdictBadge(verdict) {
+  if (!verdict || !verdict.decision) return { decision: 'none', text: 'no verdict yet', tone: 'none' };
+  const d = verdict.decision;
+  const tone = d === 'agrees' ? 'good' : d === 'undecided' ? 'unsure' : 'bad';
+  return { decision: d, text: VERDICT_TEXT[d] || d.replace(/_/g, ' '), tone };
+}
+
+// One channel's rows of a point's uncertainty budget (PointRecord.budget): u of the input,
+// its sensitivity and its contribution to u(β) at channel c, largest contribution first, and
+// the combined standard uncertainty √Σ contribution².
+export function budgetRows(budget, c) {
+  const at = (v) => (Array.isArray(v) ? v[Math.min(c, v.length - 1)] : v);
+  const rows = (budget || []).map((e) => ({
+    component: e.component, distribution: e.distribution, unit: e.unit || '', random: !!e.random,
+    u: at(e.u), sensitivity: at(e.sensitivity), contribution: at(e.contribution),
+  }));
+  rows.sort((a, b) => Math.abs(b.contribution ?? 0) - Math.abs(a.contribution ?? 0));
+  const combined = Math.sqrt(rows.reduce((s, r) => s + (Number.isFinite(r.contribution) ? r.contribution ** 2 : 0), 0));
+  return { rows, combined };
+}
+
+// ---- the inverse twin ---------------------------------------------------------------------
+// A fit's parameters beside the naive fit's: value ± u, the naive value and its bias
+// (naive − fitted) in units of u.
+export function fitRows(result) {
+  const naive = new Map(((result && result.naive && result.naive.parameters) || []).map((p) => [p.name, p]));
+  return ((result && result.parameters) || []).map((p) => {
+    const n = naive.get(p.name);
+    const bias = n && Number.isFinite(n.value) ? n.value - p.value : null;
+    return {
+      name: p.name, value: p.value, u: p.u ?? null, atBound: !!p.at_bound, identifiable: p.identifiable !== false,
+      naive: n ? n.value : null, bias, biasInU: bias !== null && p.u > 0 ? bias / p.u : null,
+    };
+  });
+}
+
+// The catalogued sample's spec with its first plain number freed ("lambert:albedo=0.3" →
+// "lambert:albedo=?"): a start for the fit's model, which the technician edits.
+export function modelFromSpec(spec) {
+  if (!spec) return 'lambert:albedo=?';
+  return spec.replace(/=(-?\d+(\.\d+)?(e-?\d+)?)(?=[,+]|$)/, '=?');
+}
+
+// A model spec for scan.fit must free something: at least one '?'.
+export function checkFitModel(model) {
+  const m = String(model || '').trim();
+  if (!m) return 'give a BSDF model';
+  if (!m.includes('?')) return "mark the parameters to fit with '?' (e.g. lambert:albedo=?)";
+  return null;
+}
+
+// ---- compare ------------------------------------------------------------------------------
+export const MAX_COMPARE = 6;
+
+// Adds or removes a scan from a comparison of at most MAX_COMPARE (the oldest pick is dropped).
+export function toggleCompare(ids, id) {
+  if (ids.includes(id)) return ids.filter((x) => x !== id);
+  return [...ids, id].slice(-MAX_COMPARE);
+}
+
+// Measured β at one wavelength and incidence of several scans on one θr axis (the union of
+// their θr; null where a scan has no point), and each scan's difference to the first at the
+// θr both have. points: one array of point records per scan.
+export function compareColumns(pointLists, nm, thetaI) {
+  const curves = pointLists.map((pts) => {
+    const m = new Map();
+    for (const p of pts) {
+      const g = p.planned || p.actual;
+      if (thetaI !== null && thetaI !== undefined && Math.abs(g.theta_i - thetaI) > 1e-6) continue;
+      const c = channelOf(p.measured.wavelengths_nm, nm);
+      if (c < 0) continue;
+      const key = Math.round(g.theta_r * 1e6) / 1e6;
+      const prev = m.get(key);
+      // Repeats at one geometry: their mean.
+      m.set(key, prev ? { s: prev.s + p.measured.values[c], n: prev.n + 1 } : { s: p.measured.values[c], n: 1 });
+    }
+    return m;
+  });
+  const xs = [...new Set(curves.flatMap((m) => [...m.keys()]))].sort((a, b) => a - b);
+  const ys = curves.map((m) => xs.map((x) => (m.has(x) ? m.get(x).s / m.get(x).n : null)));
+  const diffs = ys.slice(1).map((y) => y.map((v, i) => (v !== null && ys[0][i] !== null ? v - ys[0][i] : null)));
+  return { x: xs, ys, diffs };
+}
+
+// Differences' summary: max |Δ| and rms over the θr both scans have.
+export function diffStats(diff) {
+  const v = diff.filter((d) => d !== null);
+  if (v.length === 0) return { n: 0, maxAbs: null, rms: null };
+  return { n: v.length, maxAbs: Math.max(...v.map(Math.abs)), rms: Math.sqrt(v.reduce((s, d) => s + d * d, 0) / v.length) };
+}
+
+// ---- alerts grouped per scan --------------------------------------------------------------
+// Alerts (newest first) in groups: one per scan (its alerts newest first), and one per alert
+// that names no scan, in the order of each group's newest alert.
+export function groupAlerts(alerts) {
+  const groups = [];
+  const byScan = new Map();
+  for (const a of alerts) {
+    if (a.scan_id) {
+      let g = byScan.get(a.scan_id);
+      if (!g) { g = { scan: a.scan_id, alerts: [] }; byScan.set(a.scan_id, g); groups.push(g); }
+      g.alerts.push(a);
+    } else groups.push({ scan: null, alerts: [a] });
+  }
+  return groups;
 }

@@ -7,13 +7,17 @@ import 'uplot/dist/uPlot.min.css';
 import './style.css';
 import { html } from './ui.js';
 import { Rpc, wsUrl } from './rpc.js';
-import { mergeAlerts, unacknowledged, can, coalesce } from './logic.js';
+import { mergeAlerts, unacknowledged, can, coalesce, parseRoute, routeHash } from './logic.js';
 import { InstrumentPanel } from './instrument.js';
 import { QueuePanel, SubmitForm } from './queue.js';
 import { ScanPanel } from './scan.js';
 import { AlertsPanel } from './alerts.js';
 import { SamplesPanel } from './samples.js';
 import { TwinPanel } from './twin.js';
+import { ScansPanel } from './history.js';
+import { ScanView } from './scanview.js';
+import { ComparePanel } from './compare.js';
+import { SampleView } from './sampleview.js';
 
 const TOKEN_KEY = 'gonio.token';
 
@@ -43,12 +47,36 @@ function Login({ onLogin, error }) {
   </main>`;
 }
 
-const VIEWS = [['run', 'Instrument & queue'], ['alerts', 'Alerts'], ['samples', 'Samples'], ['twin', 'Twin']];
+const VIEWS = [['run', 'Instrument & queue'], ['scans', 'Scans'], ['alerts', 'Alerts'], ['samples', 'Samples'], ['twin', 'Twin']];
+// The nav entry a route belongs to.
+const NAV_OF = { scan: 'scans', compare: 'scans', sample: 'samples' };
+
+// The route in the URL's hash ("#/scan/12"): it survives a reload, and the login page leaves it
+// alone, so a link opens its view once the token is given.
+function useRoute() {
+  const [route, setRoute] = useState(() => parseRoute(location.hash));
+  useEffect(() => {
+    const on = () => setRoute((cur) => (routeHash(cur) === routeHash(parseRoute(location.hash)) ? cur : parseRoute(location.hash)));
+    addEventListener('hashchange', on);
+    return () => removeEventListener('hashchange', on);
+  }, []);
+  // The view changes at once (as a click expects), and the hash follows (its hashchange
+  // gives the same route again).
+  const navigate = useCallback((r) => {
+    const h = routeHash(r);
+    setRoute((cur) => (routeHash(cur) === h ? cur : parseRoute(h)));
+    if (location.hash !== h) location.hash = h;
+  }, []);
+  return [route, navigate];
+}
 
 function Dashboard({ token, onLogout, onRefused }) {
   const [link, setLink] = useState('connecting');
   const [me, setMe] = useState(null);
-  const [view, setView] = useState('run');
+  const [route, navigate] = useRoute();
+  const view = route.view;
+  const setView = (v) => navigate({ view: v, params: {} });
+  const [reloads, setReloads] = useState(0); // bumps when the views should read goniod again
   const [status, setStatus] = useState(null);
   const [queue, setQueue] = useState(null);
   const [alerts, setAlerts] = useState([]);
@@ -58,7 +86,11 @@ function Dashboard({ token, onLogout, onRefused }) {
   const [toast, setToast] = useState(null);
   const bus = useRef(makeBus()).current;
   const rpc = useRef(null);
-  const call = useCallback((m, p) => rpc.current.call(m, p), []);
+  // Views opened by a link mount with the page, and their effects run before this one's,
+  // which makes the connection: their calls wait for it.
+  const made = useRef(null);
+  if (!made.current) { let resolve; made.current = { promise: new Promise((r) => { resolve = r; }), resolve }; }
+  const call = useCallback((m, p) => (rpc.current ? rpc.current.call(m, p) : made.current.promise.then((r) => r.call(m, p))), []);
   const notify = useCallback((msg) => { setToast(msg); setTimeout(() => setToast((t) => (t === msg ? null : t)), 6000); }, []);
 
   const refreshQueue = useCallback(async () => {
@@ -68,7 +100,7 @@ function Dashboard({ token, onLogout, onRefused }) {
   }, []);
 
   useEffect(() => {
-    let timer = null;
+    let timer = null, opened = false;
     const reload = async () => {
       try {
         const [st, q, al, sm, info] = await Promise.all([
@@ -78,6 +110,8 @@ function Dashboard({ token, onLogout, onRefused }) {
         setSamples(sm);
         setThresholds(info.divergence);
         setScanId((cur) => cur ?? (q.running ? q.running.id : null));
+        if (opened) setReloads((n) => n + 1); // a reconnection: the views read goniod again
+        opened = true;
       } catch (e) { notify(e.message); }
     };
     const progress = new Map(); // scan → its latest progress, applied together
@@ -104,6 +138,7 @@ function Dashboard({ token, onLogout, onRefused }) {
       },
     });
     rpc.current = r;
+    made.current.resolve(r);
     r.start();
     // Arm positions while a scan moves them (instrument.state is sent on state changes only),
     // and the queue, which other clients change without a notification (a scan queued by
@@ -118,12 +153,13 @@ function Dashboard({ token, onLogout, onRefused }) {
   }, [token]);
 
   const role = me ? me.role : 'none';
-  const open = (id) => { setScanId(id); setView('run'); };
+  const open = (id) => navigate({ view: 'scan', id, params: {} });
+  const nav = NAV_OF[view] || view;
   const count = unacknowledged(alerts);
   return html`<div class="app">
     <header>
       <h1>gonio</h1>
-      <nav aria-label="views">${VIEWS.map(([k, label]) => html`<button class=${view === k ? 'active' : ''} aria-current=${view === k ? 'page' : undefined} data-testid=${`nav-${k}`} onClick=${() => setView(k)}>${label}${k === 'alerts' ? html` <span class=${`count${count ? ' hot' : ''}`} data-testid="alert-count" aria-label="unacknowledged alerts">${count}</span>` : ''}</button>`)}</nav>
+      <nav aria-label="views">${VIEWS.map(([k, label]) => html`<button class=${nav === k ? 'active' : ''} aria-current=${nav === k ? 'page' : undefined} data-testid=${`nav-${k}`} onClick=${() => setView(k)}>${label}${k === 'alerts' ? html` <span class=${`count${count ? ' hot' : ''}`} data-testid="alert-count" aria-label="unacknowledged alerts">${count}</span>` : ''}</button>`)}</nav>
       <span class=${`link link-${link}`} data-testid="link-state">${link === 'open' ? 'connected' : link}</span>
       <span class="who" data-testid="whoami">${me ? `${me.name} (${me.role})` : ''}</span>
       ${can(role, 'control') && status && html`<button class="stop" data-testid="instrument-stop" title="Stop the arms and pause the running scan" onClick=${() => call('instrument.stop').catch((e) => notify(e.message))}>Stop</button>`}
@@ -141,6 +177,10 @@ function Dashboard({ token, onLogout, onRefused }) {
         </div>
         <div class="col wide"><${ScanPanel} scanId=${scanId} call=${call} bus=${bus} thresholds=${thresholds} notify=${notify} /></div>
       </div>`}
+      ${view === 'scans' && html`<${ScansPanel} params=${route.params} samples=${samples} call=${call} navigate=${navigate} reloads=${reloads} />`}
+      ${view === 'scan' && html`<${ScanView} key=${route.id} scanId=${route.id} samples=${samples} status=${status} role=${role} call=${call} bus=${bus} thresholds=${thresholds} notify=${notify} navigate=${navigate} reloads=${reloads} />`}
+      ${view === 'compare' && html`<${ComparePanel} ids=${route.ids} params=${route.params} samples=${samples} call=${call} navigate=${navigate} notify=${notify} />`}
+      ${view === 'sample' && html`<${SampleView} sampleId=${route.id} samples=${samples} call=${call} navigate=${navigate} reloads=${reloads} />`}
       ${view === 'alerts' && html`<${AlertsPanel} alerts=${alerts} role=${role} call=${call} notify=${notify} onShowScan=${open} />`}
       ${view === 'samples' && html`<${SamplesPanel} samples=${samples} role=${role} call=${call} onCreated=${(s) => setSamples((l) => [...l, s])} />`}
       ${view === 'twin' && (can(role, 'predict') ? html`<${TwinPanel} call=${call} />` : html`<section class="panel"><p>The twin playground needs a technician's token.</p></section>`)}

@@ -48,7 +48,9 @@ function hline(value, scale, colour) {
 // curve: logic.js Curve (its cols are the plot's columns, kept sorted by θr).
 // Point markers follow uPlot's density rule (shown while the points are a few pixels apart):
 // a marker per point would cost an arc each per frame on a 1,000-point scan.
-export function betaPlot(el, curve, { log, width, height, onPick }) {
+// fitted: an optional lookup (θi, θr) → β of a fitted model at the curve's wavelength, drawn
+// as a third series.
+export function betaPlot(el, curve, { log, width, height, onPick, fitted = null }) {
   const measured = css('--measured', '#1565c0'), twin = css('--twin', '#e65100');
   const opts = {
     width, height,
@@ -58,6 +60,7 @@ export function betaPlot(el, curve, { log, width, height, onPick }) {
       { label: 'θr' },
       { label: 'measured β ± u', stroke: measured, width: 1.5, points: { size: 5 } },
       { label: 'twin β ± s.e.', stroke: twin, width: 1.5, dash: [5, 3], points: { show: false } },
+      ...(fitted ? [{ label: 'fitted model', stroke: css('--fitted', '#2e7d32'), width: 2, points: { show: false } }] : []),
     ],
     legend: { live: true },
     hooks: {
@@ -70,14 +73,29 @@ export function betaPlot(el, curve, { log, width, height, onPick }) {
       }],
     },
   };
-  return new uPlot(opts, betaData(curve, log), el);
+  return new uPlot(opts, betaData(curve, log, fitted), el);
 }
 
-export function betaData(curve, log) {
+export function betaData(curve, log, fitted = null) {
   const c = curve.cols;
-  if (!log) return [c[0], c[1], c[3]];
+  const cols = [c[0], c[1], c[3]];
+  if (fitted) cols.push(c[0].map((tr) => fitted(curve.thetaI, tr, curve.nm)));
+  if (!log) return cols;
   const pos = (v) => (v != null && v > 0 ? v : null);
-  return [c[0], c[1].map(pos), c[3].map(pos)];
+  return [cols[0], ...cols.slice(1).map((col) => col.map(pos))];
+}
+
+// Several curves against one θr axis (compare): ys one column per scan, nulls where a scan has
+// no point; colours in order.
+export const SERIES_COLOURS = ['#1565c0', '#e65100', '#2e7d32', '#6a1b9a', '#00838f', '#ad1457'];
+export function overlayPlot(el, x, ys, labels, { width, height, ylabel, zeroLine = false }) {
+  return new uPlot({
+    width, height,
+    scales: { x: { time: false } },
+    axes: [{ label: 'θr (°)' }, { label: ylabel, size: 70 }],
+    series: [{ label: 'θr' }, ...ys.map((_, i) => ({ label: labels[i], stroke: SERIES_COLOURS[i % SERIES_COLOURS.length], width: 1.5, spanGaps: true, points: { size: 4 } }))],
+    hooks: zeroLine ? { draw: [hline(0, 'y', '#888')] } : {},
+  }, [x, ...ys], el);
 }
 
 export function lanePlot(el, curve, { zThreshold, dEThreshold, width, height }) {

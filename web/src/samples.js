@@ -35,8 +35,9 @@ export function SamplesPanel({ samples, role, call, onCreated }) {
   return html`<section class="panel" aria-labelledby="h-samples">
     <h2 id="h-samples">Samples</h2>
     <table class="samples" data-testid="samples">
-      <thead><tr><th>id</th><th>name</th><th>BSDF</th><th>tolerance</th><th>notes</th></tr></thead>
-      <tbody>${samples.map((s) => html`<tr key=${s.id}><td>${s.id}</td><td>${s.name}</td><td><code>${s.bsdf || '–'}</code></td><td>${fmt(s.tolerance, 3)}</td><td>${s.notes}</td></tr>`)}</tbody>
+      <thead><tr><th>id</th><th>name</th><th>BSDF</th><th>tolerance</th><th>notes</th><th>scans</th></tr></thead>
+      <tbody>${samples.map((s) => html`<tr key=${s.id}><td>${s.id}</td><td><a href=${`#/sample/${s.id}`} data-testid="sample-link">${s.name}</a></td><td><code>${s.bsdf || '–'}</code></td><td>${fmt(s.tolerance, 3)}</td><td>${s.notes}</td>
+        <td><a href=${`#/scans?sample=${s.id}`} data-testid="sample-scans">scans</a></td></tr>`)}</tbody>
     </table>
     ${can(role, 'create') && html`<form class="sample-form" data-testid="sample-create" onSubmit=${(e) => { e.preventDefault(); run('create'); }} novalidate>
       <h3>New sample</h3>

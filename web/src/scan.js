@@ -3,7 +3,7 @@
 // clicked point's spectra and colours, and the exports.
 import { useEffect, useMemo, useRef, useState } from 'preact/hooks';
 import { html, download } from './ui.js';
-import { Curve, channelOf, coalesce, exportFile, fmt, incidences } from './logic.js';
+import { POINTS_PAGE, Curve, budgetRows, channelOf, coalesce, exportFile, fmt, incidences, verdictBadge } from './logic.js';
 import { betaPlot, betaData, lanePlot, laneData, spectrumPlot } from './plot.js';
 import { colourOf } from './colour.js';
 import tables from 'virtual:colour-tables';
@@ -11,12 +11,12 @@ import tables from 'virtual:colour-tables';
 // Draws into the two plots, coalescing the points that arrive between frames.
 class LivePlots {
   constructor() { this.beta = null; this.lane = null; this.pending = false; this.frames = 0; }
-  schedule(curve, log, countEl) {
+  schedule(curve, log, countEl, fitted = null) {
     if (this.pending) return;
     this.pending = true;
     requestAnimationFrame(() => {
       this.pending = false;
-      if (this.beta) this.beta.setData(betaData(curve, log));
+      if (this.beta) this.beta.setData(betaData(curve, log, fitted));
       if (this.lane) this.lane.setData(laneData(curve));
       if (countEl) countEl.dataset.points = String(curve.length);
       this.frames++;
@@ -33,7 +33,24 @@ function Swatch({ label, c }) {
   </figure>`;
 }
 
-function PointDetails({ point }) {
+// A point's uncertainty budget at one channel: what each of the instrument's stated
+// tolerances does to the twin's β there (GUM: u of the input, sensitivity, contribution).
+function Budget({ point, nm }) {
+  const wl = point.measured.wavelengths_nm;
+  const c = channelOf(wl, nm);
+  if (!point.budget || point.budget.length === 0 || c < 0) return html`<p class="muted" data-testid="point-budget-none">No uncertainty budget with this point (no prediction).</p>`;
+  const { rows, combined } = budgetRows(point.budget, c);
+  const um = point.u_model ? point.u_model[c] : null;
+  return html`<table class="budget" data-testid="point-budget">
+    <caption>Uncertainty budget of the twin's β at ${wl[c]} nm (k = 1)</caption>
+    <thead><tr><th>input</th><th>distribution</th><th>u</th><th>sensitivity</th><th>contribution to u(β)</th></tr></thead>
+    <tbody>${rows.map((r) => html`<tr data-testid="budget-row"><td>${r.component}${r.random ? html` <small class="muted">random</small>` : ''}</td><td>${r.distribution}</td>
+      <td>${fmt(r.u, 3)} ${r.unit}</td><td>${fmt(r.sensitivity, 3)}</td><td>${fmt(r.contribution, 3)}</td></tr>`)}</tbody>
+    <tfoot><tr><th colspan="4">combined √Σ contribution²${um != null ? ` (u_model ${fmt(um, 3)})` : ''}</th><td data-testid="budget-combined">${fmt(combined, 3)}</td></tr></tfoot>
+  </table>`;
+}
+
+function PointDetails({ point, nm }) {
   const ref = useRef(null);
   useEffect(() => {
     const u = spectrumPlot(ref.current, point, { width: Math.max(280, ref.current.clientWidth || 420), height: 200 });
@@ -43,14 +60,26 @@ function PointDetails({ point }) {
   const p = point.predicted ? colourOf(point.predicted.wavelengths_nm, point.predicted.values, tables) : null;
   const g = point.planned;
   return html`<div class="point-details" data-testid="point-details">
-    <h3>Point ${point.index}: θi ${fmt(g.theta_i, 3)}°, θr ${fmt(g.theta_r, 3)}° · max |z| ${fmt(point.z_max, 3)} · ΔE00 ${fmt(point.delta_e00, 3)}${point.diverged ? ' · diverged' : ''}</h3>
+    <h3>Point ${point.index}: θi ${fmt(g.theta_i, 3)}°, θr ${fmt(g.theta_r, 3)}° · max |z| ${fmt(point.z_max, 3)} · ΔE00 ${fmt(point.delta_e00, 3)}${point.diverged ? ' · diverged' : ''}${point.decision ? html` · <span class=${`verdict tone-${verdictBadge({ decision: point.decision }).tone}`} data-testid="point-decision">${verdictBadge({ decision: point.decision }).text}</span>` : ''}</h3>
     <div class="plot" ref=${ref}></div>
     <div class="swatches"><${Swatch} label="measured" c=${m} />${p && html`<${Swatch} label="twin" c=${p} />`}</div>
     <p class="muted">CIELAB: D65, 10° observer (as the ΔE00 figures)</p>
+    <${Budget} point=${point} nm=${nm} />
   </div>`;
 }
 
-export function ScanPanel({ scanId, call, bus, thresholds, notify }) {
+// The scan's verdict from all its points (scan.get `verdict`) as a badge.
+function VerdictBadge({ verdict }) {
+  const b = verdictBadge(verdict);
+  const cause = verdict && verdict.cause ? ` · cause: ${verdict.cause.parameter} ${fmt(verdict.cause.value, 4)} ± ${fmt(verdict.cause.u, 2)}` : '';
+  return html`<div class="verdict-row"><span class=${`verdict tone-${b.tone}`} data-testid="verdict" data-decision=${b.decision}
+    title=${verdict && verdict.summary ? verdict.summary : ''}>verdict: ${b.text}</span>
+    ${verdict && verdict.summary && html`<span class="muted verdict-summary">${verdict.summary}${cause}</span>`}</div>`;
+}
+
+// fitted: null, or (θi, θr, nm) → β of a fitted model, drawn over the points. onScan(scan):
+// each scan.get result (its verdict and fits), for the view around the panel.
+export function ScanPanel({ scanId, call, bus, thresholds, notify, fitted = null, onScan = null, reloads = 0, empty = 'Submit a scan or pick one in the queue.' }) {
   const [scan, setScan] = useState(null);
   const [nm, setNm] = useState(550);
   const [thetaI, setThetaI] = useState(null);
@@ -71,7 +100,7 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify }) {
     const take = (p) => {
       if (p.scan_id !== scanId || points.has(p.index)) return;
       points.set(p.index, p);
-      if (store.current.curve && store.current.curve.add(p)) live.current.schedule(store.current.curve, store.current.log, hostEl.current);
+      if (store.current.curve && store.current.curve.add(p)) live.current.schedule(store.current.curve, store.current.log, hostEl.current, store.current.fitted);
     };
     const off = bus.on('scan.point', take);
     (async () => {
@@ -79,11 +108,12 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify }) {
         const s = await call('scan.get', { scan: scanId });
         if (gone) return;
         setScan(s);
+        if (onScan) onScan(s);
         const wl = s.plan.wavelengths;
         setNm((cur) => wl[channelOf(wl, cur)]);
         let offset = 0;
         for (;;) {
-          const page = await call('scan.points', { scan: scanId, offset, limit: 1000 });
+          const page = await call('scan.points', { scan: scanId, offset, limit: POINTS_PAGE });
           if (gone) return;
           for (const p of page.points) if (!points.has(p.index)) points.set(p.index, p);
           if (page.next_offset == null || page.points.length === 0) break;
@@ -94,9 +124,15 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify }) {
       } catch (e) { if (!gone) notify(`scan ${scanId}: ${e.message}`); }
     })();
     const progress = coalesce((p) => setScan((s) => (s ? { ...s, state: p.state, points_done: p.points_done, points_total: p.points_total, points_diverged: p.points_diverged } : s)), 250);
-    const offState = bus.on('scan.progress', (p) => { if (p.scan === scanId) progress(p); });
+    // The verdict firms up with every point: read again at most every 2 s while points come.
+    const verdict = coalesce(() => call('scan.get', { scan: scanId }).then((s) => {
+      if (gone) return;
+      setScan((cur) => (cur ? { ...cur, verdict: s.verdict, fits: s.fits, state: s.state, finished_at: s.finished_at } : s));
+      if (onScan) onScan(s);
+    }, () => {}), 2000);
+    const offState = bus.on('scan.progress', (p) => { if (p.scan === scanId) { progress(p); verdict(); } });
     return () => { gone = true; off(); offState(); };
-  }, [scanId]);
+  }, [scanId, reloads]);
 
   // (Re)build the curve and the plots for the chosen wavelength, incidence and scale.
   useEffect(() => {
@@ -109,8 +145,9 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify }) {
     if (curve.thetaI !== thetaI && thetaI === null) setThetaI(curve.thetaI);
     store.current.curve = curve;
     store.current.log = log;
+    store.current.fitted = fitted;
     const width = Math.max(320, hostEl.current.clientWidth || 640);
-    const beta = betaPlot(betaEl.current, curve, { log, width, height: 300, onPick: (i) => setPicked(store.current.points.get(i) || null) });
+    const beta = betaPlot(betaEl.current, curve, { log, width, height: 300, fitted, onPick: (i) => setPicked(store.current.points.get(i) || null) });
     const lane = lanePlot(laneEl.current, curve, { zThreshold: thresholds && thresholds.z_threshold, dEThreshold: thresholds && thresholds.delta_e_threshold, width, height: 170 });
     live.current.beta = beta;
     live.current.lane = lane;
@@ -122,7 +159,7 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify }) {
     }) : null;
     if (ro) ro.observe(hostEl.current);
     return () => { if (ro) ro.disconnect(); beta.destroy(); lane.destroy(); live.current.beta = live.current.lane = null; };
-  }, [scan && scan.id, version, nm, thetaI, log, thresholds]);
+  }, [scan && scan.id, version, nm, thetaI, log, thresholds, fitted]);
 
   const incs = useMemo(() => incidences([...store.current.points.values()]), [version, scan && scan.points_done]);
   const exp = async (format) => {
@@ -132,7 +169,7 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify }) {
     } catch (e) { notify(`export ${format}: ${e.message}`); }
   };
 
-  if (!scanId) return html`<section class="panel scan-panel"><h2>Scan</h2><p class="muted">Submit a scan or pick one in the queue.</p><div data-testid="scan-plot" data-points="0"></div></section>`;
+  if (!scanId) return html`<section class="panel scan-panel"><h2>Scan</h2><p class="muted">${empty}</p><div data-testid="scan-plot" data-points="0"></div></section>`;
   const wl = scan ? scan.plan.wavelengths : [];
   return html`<section class="panel scan-panel" aria-labelledby="h-scan">
     <h2 id="h-scan">Scan ${scanId}${scan ? ` · ${scan.state} · ${scan.points_done}/${scan.points_total} points` : ''}</h2>
@@ -149,10 +186,11 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify }) {
     </div>
     <div ref=${hostEl} data-testid="scan-plot" data-points="0" class="plots">
       <div ref=${betaEl} class="plot"></div>
+      ${scan && html`<${VerdictBadge} verdict=${scan.verdict} />`}
       <div ref=${laneEl} class="plot lane" data-testid="divergence-lane"></div>
     </div>
     <p class="muted">Click a point (or give its index) for its spectra and colours. Thresholds: max |z| ${fmt(thresholds && thresholds.z_threshold, 3)}, ΔE00 ${fmt(thresholds && thresholds.delta_e_threshold, 3)}.</p>
-    ${picked && html`<${PointDetails} point=${picked} />`}
+    ${picked && html`<${PointDetails} point=${picked} nm=${nm} />`}
   </section>`;
 }
 

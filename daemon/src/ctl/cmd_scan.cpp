@@ -67,6 +67,7 @@ struct ScanArgs {
   bool watch = false;
   std::int64_t id = 0;
   std::string reason;
+  std::string since, until, text;  // scan list
   std::size_t offset = 0, limit = 100;
   std::string format = "csv", output;
   std::string model;
@@ -160,11 +161,17 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
   auto* slist = scan->add_subcommand("list", "recent scans");
   slist->add_option("--state", a->state);
   slist->add_option("--sample", a->sample);
+  slist->add_option("--since", a->since, "submitted at or after this UTC time (2025-01-31T00:00:00Z)");
+  slist->add_option("--until", a->until, "submitted before this UTC time");
+  slist->add_option("--text", a->text, "text in the label");
   slist->callback([&ctx, a] {
     ctx.action = [a](Session& s) {
       json p{{"limit", 100}};
       if (!a->state.empty()) p["state"] = a->state;
       if (!a->sample.empty()) p["sample"] = sample_ref(a->sample);
+      if (!a->since.empty()) p["since"] = a->since;
+      if (!a->until.empty()) p["until"] = a->until;
+      if (!a->text.empty()) p["text"] = a->text;
       const auto r = s.call("scan.list", p);
       print(s.options(), r, [&] { scans_table(r); });
       return 0;

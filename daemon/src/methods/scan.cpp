@@ -92,6 +92,17 @@ void register_scan(MethodRegistrar& reg, Services& s) {
       f.state = parse_enum<ScanState>(json_util::get_as<std::string>(*st, "state"), "state");
     if (const auto* sm = r.raw("sample"); sm && !sm->is_null())
       f.sample_id = resolve_sample(s.store, *sm, "sample").id;
+    // Times are normalised as the store writes them, so that comparing the text compares times.
+    for (auto [key, to] : {std::pair{"since", &f.since}, std::pair{"until", &f.until}})
+      if (const auto* t = r.raw(key); t && !t->is_null())
+        *to = utc::format(utc::parse(json_util::get_as<std::string>(*t, key), key));
+    if (f.since && f.until && *f.until <= *f.since)
+      throw Error::invalid("until", fmt::format("{} is not after since ({})", *f.until, *f.since));
+    if (const auto* t = r.raw("text"); t && !t->is_null()) {
+      auto text = json_util::get_as<std::string>(*t, "text");
+      if (text.size() > 200) throw Error::invalid("text", "is longer than 200 characters");
+      if (!text.empty()) f.text = std::move(text);
+    }
     f.offset = read_offset(r);
     f.limit = read_count(r, "limit", 100, kMaxPage);
     r.finish();

@@ -1,4 +1,10 @@
 // goniod configuration: every key validated, unknown keys rejected, examples parse.
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "gonio/daemon/config.hpp"
@@ -118,6 +124,32 @@ TEST(Config, ReconnectBackOffIsBoundedAndOrdered) {
   EXPECT_EQ(field_of("[instrument]\nreconnect_initial_s = 0\n"), "instrument.reconnect_initial_s");
   EXPECT_EQ(field_of("[instrument]\nreconnect_initial_s = 5\nreconnect_max_s = 1\n"),
             "instrument.reconnect_max_s");
+}
+
+TEST(Config, ABuildTreesGoniodServesItsOwnDashboardUnlessWebRootIsSet) {
+  namespace fs = std::filesystem;
+  const auto tree = fs::temp_directory_path() / fmt::format("gonio-web-root-test-{}", ::getpid());
+  fs::remove_all(tree);
+  fs::create_directories(tree / "bin");
+  fs::create_directories(tree / "web" / "dist");
+  const auto exe = (tree / "bin" / "goniod").string();
+  const auto dist = (tree / "web" / "dist").string();
+  // Without an index.html the directory is not a dashboard.
+  EXPECT_EQ(web_root_beside(exe), "");
+  EXPECT_EQ(Config{}.served_web_root(exe), default_web_root());
+  std::ofstream(tree / "web" / "dist" / "index.html") << "<!doctype html>";
+  EXPECT_EQ(web_root_beside(exe), dist);
+  EXPECT_EQ(web_root_beside(""), "");
+  const auto unset = Config::parse("[server]\nlog_level = \"info\"\n", "t.toml");
+  EXPECT_FALSE(unset.web_root_set);
+  EXPECT_EQ(unset.served_web_root(exe), dist);
+  // Set, even to the installed directory or to none: as set.
+  for (const std::string& root : {std::string("/srv/gonio-web"), default_web_root(), std::string()}) {
+    const auto c = Config::parse(fmt::format("[server]\nweb_root = \"{}\"\n", root), "t.toml");
+    EXPECT_TRUE(c.web_root_set);
+    EXPECT_EQ(c.served_web_root(exe), root);
+  }
+  fs::remove_all(tree);
 }
 
 TEST(Config, WebRootIsTheInstalledDashboardAnAbsolutePathOrNone) {

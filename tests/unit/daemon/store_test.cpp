@@ -167,6 +167,56 @@ TEST_F(StoreTest, QueueOrderFollowsPriorityThenSubmissionAndReorder) {
   }
 }
 
+TEST_F(StoreTest, ScansAreListedNewestFirstByStateSampleTimeAndLabel) {
+  Store s(file_);
+  SampleSpec spec;
+  spec.name = "x";
+  const auto x = s.create_sample(spec, "t").id;
+  spec.name = "y";
+  const auto y = s.create_sample(spec, "t").id;
+  auto named = [](ScanPlan p, std::string name) {
+    p.name = std::move(name);
+    return p;
+  };
+  const auto a = s.insert_scan(named(plan(x), "Gloss A"), true, "t");
+  const auto b = s.insert_scan(named(plan(y), "matte"), true, "t");
+  const auto c = s.insert_scan(named(plan(x), ""), true, "t");
+  s.set_scan_state(b.id, ScanState::cancelled, "no", "t");
+  const auto ids = [&](ScanFilter f) {
+    std::vector<std::int64_t> out;
+    for (const auto& sc : s.scans(f)) out.push_back(sc.id);
+    return out;
+  };
+  using V = std::vector<std::int64_t>;
+  EXPECT_EQ(ids({}), (V{c.id, b.id, a.id}));
+  ScanFilter f;
+  f.text = "GLOSS";
+  EXPECT_EQ(ids(f), (V{a.id}));
+  f.text = "t";  // "matte"; the unnamed scan has no label to match
+  EXPECT_EQ(ids(f), (V{b.id}));
+  f.text = "%";  // a character, not a pattern
+  EXPECT_EQ(ids(f), V{});
+  f = {};
+  f.sample_id = x;
+  EXPECT_EQ(ids(f), (V{c.id, a.id}));
+  f.state = ScanState::queued;
+  f.limit = 1;
+  EXPECT_EQ(ids(f), (V{c.id}));
+  f.offset = 1;
+  EXPECT_EQ(ids(f), (V{a.id}));
+  // Submission times: [since, until).
+  f = {};
+  f.since = a.submitted_at;
+  EXPECT_EQ(ids(f), (V{c.id, b.id, a.id}));
+  f.until = a.submitted_at;
+  EXPECT_EQ(ids(f), V{});
+  f.since = "2000-01-01T00:00:00.000Z";
+  f.until = "2000-01-02T00:00:00.000Z";
+  EXPECT_EQ(ids(f), V{});
+  f.until = "2999-01-01T00:00:00.000Z";
+  EXPECT_EQ(ids(f).size(), 3u);
+}
+
 TEST_F(StoreTest, NotBeforeHoldsAScanBack) {
   Store s(file_);
   SampleSpec spec;

@@ -5,7 +5,7 @@
 // the browser is not installed.
 import { describe, it, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { copyFileSync, mkdirSync } from 'node:fs';
+import { copyFileSync, mkdirSync, readFileSync } from 'node:fs';
 import { join, resolve, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { setTimeout as sleep } from 'node:timers/promises';
@@ -164,6 +164,20 @@ describe('dashboard', () => {
     assert.equal(await page.evaluate(() => sessionStorage.getItem('gonio.token') !== null), true);
     assert.doesNotMatch(page.url(), /token|[0-9a-f]{64}/);
     await shot('01-logged-in');
+  });
+
+  // server.web_root not set: a build tree's goniod serves the tree's own dashboard, beside
+  // its executable (<build>/bin/goniod → <build>/web/dist), and says so at start.
+  const beside = resolve(dirname(exe), '..', 'web', 'dist');
+  it('serves a build tree\'s own dashboard when server.web_root is not set', { skip: beside !== webRoot && `the dashboard under test (${webRoot}) is not beside goniod` }, async () => {
+    const own = await new Goniod({ exe, webRoot: null }).start();
+    try {
+      const res = await fetch(own.url + '/');
+      assert.equal(res.status, 200);
+      assert.equal(await res.text(), readFileSync(join(webRoot, 'index.html'), 'utf8'));
+      await until('goniod did not say which dashboard it serves', async () => /dashboard: /.test(own.log()));
+      assert.match(own.log(), new RegExp(`dashboard: \\d+ files from ${webRoot.replace(/[.*+?^${}()|[\]\\]/g, '\\$&')} \\(beside goniod\\)`));
+    } finally { await own.dispose(); }
   });
 
   it('shows the API error of a bad grid at the field', async () => {
@@ -429,7 +443,7 @@ describe('dashboard', () => {
         w: Math.round(r.width), h: Math.round(r.height), least: matchMedia('(pointer: coarse), (max-width: 900px)').matches ? 44 : 24 };
     });
     const overflow = () => t.evaluate(() => document.documentElement.scrollWidth - innerWidth);
-    const views = [['alerts', 'alerts'], ['samples', 'samples'], ['twin', 'twin-form'], ['run', 'scan-submit']]; // the run view last: its controls are checked next
+    const views = [['scans', 'scans'], ['alerts', 'alerts'], ['samples', 'samples'], ['twin', 'twin-form'], ['run', 'scan-submit']]; // the run view last: its controls are checked next
     for (const [width, height] of [[820, 1180], [1180, 820]]) {
       await tablet(width, height);
       for (const [view, ready] of views) {
@@ -454,6 +468,257 @@ describe('dashboard', () => {
     await t.tap($('instrument-stop'));
     await until('no instrument.stop from the tablet', async () => (await g.call('system.audit', { limit: 20 })).some((e) => e.action === 'instrument.stop' && e.actor === 'lab-tablet'));
     await ctx.close();
+  });
+
+  // ---- the past: the scans' history, a finished scan and its links, the inverse twin ------
+  // Three short scans, finished before the page opens them: of a sample as the mock's true
+  // one ('true'), and of two that differ from it ('grey', 'glossy').
+  const hist = {};
+  it('lists the scans of the past, newest first, filtered and paged', async () => {
+    const q = await g.call('queue.status'); // the tablet stopped the arms: nothing may wait now
+    for (const s of [q.running, ...q.waiting].filter(Boolean)) await g.call('scan.cancel', { scan: s.id, reason: 'before the history' }).catch(() => {});
+    const st = await g.call('instrument.status');
+    if (st.fault_latched) await g.call('instrument.reset');
+    await g.call('sample.create', { name: 'true', bsdf: 'lambert:albedo=0.6' });
+    // 26 cancelled scans: more than a page of the history.
+    for (let i = 0; i < 26; ++i) {
+      const s = await g.call('scan.submit', { sample: 'true', name: `bulk ${i}`, grids: 'in=45;out=0', not_before: '2099-01-01T00:00:00Z' });
+      await g.call('scan.cancel', { scan: s.id, reason: 'bulk' });
+    }
+    const submit = async (sample, name) => (await g.call('scan.submit', { sample, name, grids: 'in=45;out=-30:60:15', wavelengths: '400:700:20' })).id;
+    hist.grey = await submit('grey', 'history grey');
+    hist.glossy = await submit('glossy', 'history glossy');
+    hist.true = await submit('true', 'history true');
+    await until('the history\'s scans did not finish', async () => (await g.call('scan.get', { scan: hist.true })).state === 'completed');
+    for (const k of ['grey', 'glossy']) assert.equal((await g.call('scan.get', { scan: hist[k] })).state, 'completed');
+
+    await page.bringToFront();
+    await page.click($('nav-scans'));
+    const rows = (sel = '') => page.$$eval(`${$('scans')}[data-loaded="true"] ${$('scan-row')}${sel}`, (r) => r.map((e) => ({ id: Number(e.dataset.scan), state: e.dataset.state, text: e.textContent })));
+    await page.waitForSelector(`${$('scans')}[data-loaded="true"] ${$('scan-row')}[data-scan="${hist.true}"]`, { timeout: T });
+    const first = await rows();
+    assert.equal(first.length, 25, 'a page of 25');
+    assert.equal(first[0].id, hist.true, 'the newest first');
+    assert.deepEqual(first.map((r) => r.id), first.map((r) => r.id).sort((a, b) => b - a));
+    // The next page: older scans only.
+    await page.click($('scans-next'));
+    await page.waitForSelector(`${$('scans')}[data-page="2"][data-loaded="true"] ${$('scan-row')}`, { timeout: T });
+    await page.waitForFunction((s, last) => [...document.querySelectorAll(s)].every((e) => Number(e.dataset.scan) < last), { timeout: T }, `${$('scans')}[data-page="2"] ${$('scan-row')}`, first[24].id);
+    assert.match(page.url(), /#\/scans\?page=2$/);
+    await page.click($('scans-prev'));
+    await page.waitForSelector(`${$('scans')}[data-page="1"] ${$('scan-row')}[data-scan="${hist.true}"]`, { timeout: T });
+
+    // Text in the label, then a state.
+    await fill(`${$('scans-filter')} input[name=text]`, 'HISTORY');
+    await page.click($('scans-apply'));
+    const only = async (what, want) => {
+      await page.waitForFunction((s, n) => document.querySelectorAll(s).length === n, { timeout: T }, `${$('scans')}[data-loaded="true"] ${$('scan-row')}`, want.length);
+      assert.deepEqual((await rows()).map((r) => r.id), want, what);
+    };
+    await only('label text', [hist.true, hist.glossy, hist.grey]);
+    await page.select(`${$('scans-filter')} select[name=sample]`, String((await g.call('sample.get', { sample: 'glossy' })).id));
+    await page.click($('scans-apply'));
+    await only('label text and sample', [hist.glossy]);
+    await page.select(`${$('scans-filter')} select[name=sample]`, '');
+    await fill(`${$('scans-filter')} input[name=text]`, 'bulk 1');
+    await page.select(`${$('scans-filter')} select[name=state]`, 'cancelled');
+    await page.click($('scans-apply'));
+    await page.waitForFunction((s) => document.querySelectorAll(s).length > 0 && [...document.querySelectorAll(s)].every((e) => e.dataset.state === 'cancelled' && /bulk 1/.test(e.textContent)), { timeout: T }, `${$('scans')}[data-loaded="true"] ${$('scan-row')}`);
+    assert.equal((await rows()).length, 11, "'bulk 1' and 'bulk 10'…'bulk 19'");
+    await page.select(`${$('scans-filter')} select[name=state]`, 'failed');
+    await page.click($('scans-apply'));
+    await only('no failed bulk scan', []);
+    // Days, in the link: today (UTC) has them all, tomorrow none; a bad day is named.
+    const today = new Date().toISOString().slice(0, 10);
+    const tomorrow = new Date(Date.now() + 86400000).toISOString().slice(0, 10);
+    await page.evaluate((d) => { location.hash = `#/scans?from=${d}&to=${d}&text=history`; }, today);
+    await only('today', [hist.true, hist.glossy, hist.grey]);
+    await page.evaluate((d) => { location.hash = `#/scans?from=${d}&text=history`; }, tomorrow);
+    await only('from tomorrow', []);
+    await page.evaluate(() => { location.hash = '#/scans?from=soon'; });
+    await page.waitForSelector(`${$('scans-error')}[data-field="from"]`, { timeout: T });
+    assert.equal(await attr(`${$('scans-filter')} input[name=from]`, 'aria-invalid'), 'true');
+    // goniod names the field of a bad filter.
+    await assert.rejects(g.call('scan.list', { until: '2026-01-01T00:00:00Z', since: '2026-02-01T00:00:00Z' }), (e) => e.rpc.data.field === 'until');
+    await assert.rejects(g.call('scan.list', { text: 'x'.repeat(201) }), (e) => e.rpc.data.field === 'text');
+    await shot('12-history');
+  });
+
+  it('opens a finished scan from the history with its points, verdict and budget', async () => {
+    await page.evaluate(() => { location.hash = '#/scans?text=history'; });
+    await page.waitForSelector(`${$('scan-row')}[data-scan="${hist.grey}"] ${$('scan-open')}`, { timeout: T });
+    await page.click(`${$('scan-row')}[data-scan="${hist.grey}"] ${$('scan-open')}`);
+    await page.waitForSelector(`${$('scan-view')}[data-scan="${hist.grey}"]`, { timeout: T });
+    assert.match(page.url(), new RegExp(`#/scan/${hist.grey}$`));
+    const scan = await g.call('scan.get', { scan: hist.grey });
+    await waitPoints(scan.points_done);
+    assert.equal(await points(), 7);
+    // The badge says what goniod's verdict says.
+    await page.waitForSelector($('verdict'), { timeout: T });
+    assert.ok(scan.verdict && scan.verdict.decision, 'goniod has a verdict');
+    await page.waitForFunction((s, d) => document.querySelector(s)?.dataset.decision === d, { timeout: T }, $('verdict'), scan.verdict.decision);
+    // A point's budget: a row per input, as stored.
+    const stored = (await g.call('scan.points', { scan: hist.grey, offset: 3, limit: 1 })).points[0];
+    assert.ok(stored.budget.length > 0, 'the point has a budget');
+    await fill($('point-index'), '3');
+    await page.$eval($('point-index'), (e) => e.dispatchEvent(new Event('change', { bubbles: true })));
+    await page.waitForSelector(`${$('point-details')} ${$('point-budget')}`, { timeout: T });
+    assert.equal((await page.$$(`${$('point-budget')} ${$('budget-row')}`)).length, stored.budget.length);
+    assert.match(await page.$eval($('point-details'), (e) => e.textContent), /Point 3/);
+    await shot('13-finished-scan');
+  });
+
+  it('keeps a deep link across a reload, a login and a goniod restart', async () => {
+    const link = `${g.url}/#/scan/${hist.grey}`;
+    const atScan = async (p) => {
+      await p.waitForSelector(`${$('scan-view')}[data-scan="${hist.grey}"]`, { timeout: T });
+      await p.waitForFunction((s) => Number(document.querySelector(s)?.dataset.points || 0) === 7, { timeout: T }, $('scan-plot'));
+    };
+    await page.reload({ waitUntil: 'load' });
+    await atScan(page);
+    // A colleague's link, opened in a fresh session: the login, then the same view.
+    const ctx = await browser.createBrowserContext();
+    const p = await ctx.newPage();
+    await p.setViewport({ width: 1280, height: 800 });
+    watch(p);
+    await p.goto(link, { waitUntil: 'load' });
+    await p.waitForSelector($('login-token'), { timeout: T });
+    await p.type($('login-token'), tech);
+    await p.click($('login-submit'));
+    await atScan(p);
+    assert.equal(p.url(), link);
+    // A goniod restart: both pages come back to the scan.
+    down = true;
+    await g.restart();
+    await page.waitForFunction((s) => document.querySelector(s)?.textContent === 'connected', { timeout: T }, $('link-state'));
+    down = false;
+    await atScan(page);
+    await p.reload({ waitUntil: 'load' });
+    await atScan(p);
+    await ctx.close();
+  });
+
+  it('shows a viewer the scan, its verdict and fits, but no fit or calibrate control', async () => {
+    const ctx = await browser.createBrowserContext();
+    const v = await ctx.newPage();
+    await v.setViewport({ width: 1280, height: 800 });
+    watch(v);
+    await v.goto(`${g.url}/#/scan/${hist.grey}`, { waitUntil: 'load' });
+    await v.waitForSelector($('login-token'), { timeout: T });
+    await v.type($('login-token'), viewer);
+    await v.click($('login-submit'));
+    await v.waitForSelector(`${$('scan-view')}[data-scan="${hist.grey}"] ${$('verdict')}`, { timeout: T });
+    await v.waitForSelector($('fits'), { timeout: T });
+    for (const id of ['fit-form', 'fit-run', 'calibrate-form', 'calibrate-dry', 'calibrate-apply'])
+      assert.equal(await v.$($(id)), null, `a viewer sees ${id}`);
+    await ctx.close();
+    // …where a technician has the fit and an admin the calibration too.
+    await page.bringToFront();
+    await page.waitForSelector($('fit-form'), { timeout: T });
+    assert.equal(await page.$($('calibrate-form')), null, 'a technician sees calibrate-form');
+  });
+
+  it('fits a model from the page and draws it over the points', async () => {
+    await page.bringToFront();
+    await page.waitForSelector(`${$('scan-view')}[data-scan="${hist.grey}"] ${$('fit-form')}`, { timeout: T });
+    assert.equal(await page.$eval('#fit-model', (e) => e.value), 'lambert:albedo=?', 'the catalogued spec, freed');
+    // Bad models are named at the field: one without '?' (the page), one goniod refuses.
+    await fill('#fit-model', 'lambert:albedo=0.5');
+    await page.click($('fit-run'));
+    await page.waitForSelector($('fit-error-model'), { timeout: T });
+    await fill('#fit-model', 'nosuchmodel:x=?');
+    await page.click($('fit-run'));
+    await page.waitForFunction((s) => /nosuchmodel|model/i.test(document.querySelector(s)?.textContent || '') && document.querySelector('#fit-model').getAttribute('aria-invalid') === 'true', { timeout: T }, $('fit-error-model'));
+    // The fit: progress while it runs, then the parameter ± u. The mock's true sample is
+    // lambert:albedo=0.6, whatever the catalog says.
+    await fill('#fit-model', 'lambert:albedo=?');
+    await fill('#fit-samples', '2048');
+    await page.evaluate((s) => {
+      window.__sawProgress = false;
+      new MutationObserver(() => { if (document.querySelector(s)) window.__sawProgress = true; }).observe(document.body, { childList: true, subtree: true });
+    }, $('fit-progress'));
+    await page.click($('fit-run'));
+    await page.waitForSelector(`${$('fit-result')} ${$('fit-param')}`, { timeout: T * 3 });
+    assert.equal(await page.evaluate(() => window.__sawProgress), true, 'no progress shown while fitting');
+    const p = await page.$eval($('fit-param'), (e) => ({ name: e.dataset.name, value: Number(e.dataset.value), u: Number(e.dataset.u) }));
+    assert.match(p.name, /albedo/);
+    assert.ok(Math.abs(p.value - 0.6) < 0.06, `albedo ${p.value} ± ${p.u}, the mock's is 0.6`);
+    assert.ok(p.u > 0);
+    assert.match(await page.$eval($('fit-result'), (e) => e.textContent), /naive/);
+    // Stored with the scan, listed, and its curve drawn over the points.
+    const fits = (await g.call('scan.get', { scan: hist.grey })).fits;
+    assert.equal(fits[0].kind, 'fit');
+    assert.equal(fits[0].model, 'lambert:albedo=?');
+    await page.waitForSelector(`${$('fits')} ${$('fit-item')}[data-kind="fit"]`, { timeout: T });
+    await page.waitForSelector(`${$('fit-curve')}[data-drawn="true"]`, { timeout: T * 2 });
+    await page.waitForFunction((s) => /fitted model/.test(document.querySelector(s)?.textContent || ''), { timeout: T }, `${$('scan-plot')} .u-legend`);
+    await shot('14-fit');
+  });
+
+  it('calibrates as an admin: a dry run first, the profile kept', async () => {
+    const ctx = await browser.createBrowserContext();
+    const a = await ctx.newPage();
+    await a.setViewport({ width: 1280, height: 800 });
+    watch(a);
+    const before = (await g.call('instrument.status')).profile;
+    await a.goto(`${g.url}/#/scan/${hist.true}`, { waitUntil: 'load' });
+    await a.waitForSelector($('login-token'), { timeout: T });
+    await a.type($('login-token'), g.adminToken);
+    await a.click($('login-submit'));
+    await a.waitForSelector($('calibrate-form'), { timeout: T });
+    assert.match(await a.$eval($('profile-version'), (e) => e.textContent), new RegExp(`#${before.version}`));
+    assert.equal(await a.$eval($('calibrate-apply'), (e) => e.disabled), true, 'apply before a dry run');
+    // Gain alone: quick, and separable on one scan.
+    await a.$$eval(`${$('calibrate-form')} input[name=fit]`, (boxes) => boxes.forEach((b) => { if (b.checked !== (b.value === 'gain')) b.click(); }));
+    await a.click($('calibrate-dry'));
+    await a.waitForSelector(`${$('fit-result')}[data-kind="calibrate"] ${$('fit-param')}`, { timeout: T * 3 });
+    assert.match(await a.$eval($('fit-param'), (e) => e.dataset.name), /gain/);
+    await a.waitForSelector(`${$('calibrate-applied')}[data-applied="false"]`, { timeout: T });
+    assert.equal(await a.$eval($('calibrate-apply'), (e) => e.disabled), false, 'apply after the dry run');
+    assert.deepEqual((await g.call('instrument.status')).profile, before, 'a dry run keeps the profile');
+    assert.ok((await g.call('scan.get', { scan: hist.true })).fits.some((f) => f.kind === 'calibrate'));
+    await a.screenshot({ path: join(artifacts, '15-calibrate.png'), fullPage: true });
+    await ctx.close();
+  });
+
+  it('compares two scans from the history', async () => {
+    await page.bringToFront();
+    await page.evaluate(() => { location.hash = '#/scans?text=history'; });
+    await page.waitForSelector(`${$('scan-row')}[data-scan="${hist.grey}"]`, { timeout: T });
+    await page.click(`${$('scan-row')}[data-scan="${hist.grey}"] ${$('compare-pick')}`);
+    await page.click(`${$('scan-row')}[data-scan="${hist.true}"] ${$('compare-pick')}`);
+    await page.click($('compare-open'));
+    await page.waitForSelector(`${$('compare')}[data-scans="${hist.grey},${hist.true}"] ${$('compare-plot')} canvas`, { timeout: T });
+    assert.equal((await page.$$($('compare-row'))).length, 2);
+    assert.equal(await page.$eval($('compare'), (e) => e.dataset.x), '7');
+    // grey (albedo 0.3 in the catalog) and true measure the same sample: what differs is the
+    // mock's noise and drift, a few per cent of β ≈ 0.6 at most.
+    const d = Number(await page.$eval($('compare-maxdiff'), (e) => e.textContent));
+    assert.ok(d >= 0 && d < 0.1, `max |Δβ| ${d}`);
+    await page.reload({ waitUntil: 'load' });
+    await page.waitForSelector(`${$('compare')}[data-scans="${hist.grey},${hist.true}"] ${$('compare-plot')} canvas`, { timeout: T });
+    await shot('16-compare');
+  });
+
+  it('links samples to their scans and groups alerts per scan', async () => {
+    await page.click($('nav-samples'));
+    const grey = (await g.call('sample.get', { sample: 'grey' })).id;
+    await page.waitForSelector(`${$('samples')} a[href="#/sample/${grey}"]`, { timeout: T });
+    await page.click(`${$('samples')} a[href="#/sample/${grey}"]`);
+    await page.waitForSelector(`${$('sample-view')}[data-sample="${grey}"] ${$('scans')}[data-loaded="true"] ${$('scan-row')}[data-scan="${hist.grey}"]`, { timeout: T });
+    const ofGrey = (await g.call('scan.list', { sample: 'grey', limit: 25 })).map((s) => s.id);
+    assert.deepEqual(await page.$$eval($('scan-row'), (r) => r.map((e) => Number(e.dataset.scan))), ofGrey);
+    await page.click($('nav-alerts'));
+    const ofScan = (await g.call('alert.list', { scan: hist.grey })).map((a) => a.id);
+    assert.ok(ofScan.length > 0, 'grey diverges: the scan has alerts');
+    await page.waitForSelector(`${$('alert-group')}[data-scan="${hist.grey}"]`, { timeout: T });
+    const grouped = await page.$$eval(`${$('alert-group')}[data-scan="${hist.grey}"] li.alert`, (l) => l.map((e) => Number(e.dataset.testid.slice(6))));
+    assert.deepEqual(grouped, [...grouped].sort((x, y) => y - x), 'newest first');
+    assert.deepEqual([...grouped].sort(), [...ofScan].sort());
+    assert.equal((await page.$$(`${$('alert-group')}[data-scan="${hist.grey}"]`)).length, 1, 'one group per scan');
+    await page.click(`${$('alert-group')}[data-scan="${hist.grey}"] .group-head button`);
+    await page.waitForSelector(`${$('scan-view')}[data-scan="${hist.grey}"]`, { timeout: T });
+    await shot('17-alert-groups');
   });
 
   it('met no page errors and no CSP violations', async () => {

@@ -10,8 +10,9 @@ import { setTimeout as sleep } from 'node:timers/promises';
 export const TRUE_SAMPLE = 'lambert:albedo=0.6'; // the mock lab's hidden sample
 
 export class Goniod {
-  // exe: the goniod binary; webRoot: the built dist/; timeScale: the mock's real seconds per
-  // virtual second (small: fast scans).
+  // exe: the goniod binary; webRoot: the built dist/ (null: server.web_root not set, so goniod
+  // looks for its own); timeScale: the mock's real seconds per virtual second (small: fast
+  // scans).
   constructor({ exe, webRoot, timeScale = 0.3, extra = '' }) {
     Object.assign(this, { exe, webRoot, timeScale, extra });
     this.state = mkdtempSync(join(tmpdir(), 'gonio-web-'));
@@ -21,8 +22,7 @@ export class Goniod {
   config() {
     return `[server]
 listen = ["http://127.0.0.1:${this.port}"]
-web_root = "${this.webRoot}"
-log_level = "debug"
+${this.webRoot === null ? '' : `web_root = "${this.webRoot}"\n`}log_level = "debug"
 
 [instrument.motion]
 driver = "mock"

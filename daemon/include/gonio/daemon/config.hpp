@@ -81,6 +81,10 @@ inline constexpr const char* kDemoSampleBsdf =
 // Where the package installs the dashboard (web/): <datadir>/gonio/web.
 std::string default_web_root();
 
+// A build tree's own dashboard beside the executable `exe` (<build>/bin/goniod →
+// <build>/web/dist) when that directory holds an index.html; else empty.
+std::string web_root_beside(std::string_view exe);
+
 struct Config {
   // Keys that still load but no longer do anything (logged at start).
   std::vector<std::string> warnings;
@@ -101,8 +105,12 @@ struct Config {
   std::size_t max_batch = 128;        // elements of one batch
   std::size_t max_response_bytes = 8u << 20;
   std::vector<std::string> allowed_origins;  // browser origins besides the listener's own host
-  // The dashboard's files, served on the HTTP listeners (empty: no dashboard).
+  // The dashboard's files, served on the HTTP listeners (empty: no dashboard). Unless the
+  // file sets it (web_root_set), goniod serves a build tree's own beside its executable
+  // first (served_web_root).
   std::string web_root = default_web_root();
+  bool web_root_set = false;
+  std::string served_web_root(std::string_view exe) const;
   std::size_t max_connections = 512;
   std::size_t rpc_threads = 2;        // workers for blocking methods
   std::string log_level = "info";

@@ -103,6 +103,9 @@ struct OutboxStats {
 struct ScanFilter {
   std::optional<ScanState> state;
   std::optional<std::int64_t> sample_id;
+  // submitted_at in [since, until), as utc::format writes it (so text order is time order)
+  std::optional<std::string> since, until;
+  std::optional<std::string> text;  // in the label (plan.name), ASCII case ignored
   std::size_t offset = 0, limit = 100;
 };
 
