@@ -128,9 +128,10 @@ double albedo_hint(const Bsdf& b, const Vec3& wo) {
 }
 
 std::span<const ModelInfo* const> models() {
-  static const std::array<const ModelInfo*, 7> all{
+  static const std::array all{
       &lambert_model(),    &mirror_model(),     &conductor_model(), &beckmann_model(),
-      &dielectric_model(), &oren_nayar_model(), &coat_model()};
+      &dielectric_model(), &oren_nayar_model(), &coat_model(),      &plastic_model(),
+      &abg_model()};
   return all;
 }
 

@@ -77,6 +77,8 @@ const ModelInfo& beckmann_model();
 const ModelInfo& dielectric_model();
 const ModelInfo& oren_nayar_model();
 const ModelInfo& coat_model();
+const ModelInfo& plastic_model();
+const ModelInfo& abg_model();
 std::span<const ModelInfo* const> models();
 const ModelInfo* find_model(std::string_view name);
 

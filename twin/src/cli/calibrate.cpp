@@ -54,7 +54,7 @@ void add_calibrate(CLI::App& app) {
         auto high = options;
         high.samples = std::max<std::uint64_t>(options.samples, 1u << 16);
         plot_fit(o->plot, correct(data, r.spec, *r.profile, high),
-                 fmt::format("calibration on {}", r.spec));
+                 fmt::format("calibration on {}", r.spec), r);
       }
       return kExitOk;
     });

@@ -40,8 +40,12 @@ void FitCliOptions::add_to(CLI::App& app) {
   app.add_option("--threads", fit.threads, "worker threads (0: all cores)")->capture_default_str();
   app.add_option("--max-iterations", fit.max_iterations, "Levenberg–Marquardt iterations")
       ->capture_default_str();
-  app.add_option("--table-u", table_u,
+  app.add_option("--table-u", table_u.rel,
                  "relative standard uncertainty given to tabulated input (tables carry none)")
+      ->capture_default_str();
+  app.add_option("--table-abs-u", table_u.abs,
+                 "absolute standard uncertainty (in β) added in quadrature to the relative one "
+                 "for tabulated input: the floor of tiny values")
       ->capture_default_str();
   app.add_flag("--no-naive", no_naive, "skip the comparison fit at the nominal directions");
   app.add_flag("--json", json, "JSON result");
@@ -94,12 +98,54 @@ void write_fit_table(std::ostream& out, const FitResult& r, const std::string& t
   for (const auto& w : r.warnings) out << "warning: " << w << '\n';
 }
 
+std::vector<std::string> fit_notes(const FitResult& r) {
+  std::vector<std::string> out;
+  const auto value = [](const FittedParameter& p) {
+    return std::isfinite(p.u) && !p.at_bound ? fmt::format("{:.4g} ± {:.2g}", p.value, p.u)
+                                             : fmt::format("{:.4g}{}", p.value,
+                                                           p.at_bound ? " (at bound)" : "");
+  };
+  // Consecutive parameters of one mark ("lambert.albedo@400", "@410", …) form a group.
+  const auto mark = [](const std::string& name) { return name.substr(0, name.find('@')); };
+  for (std::size_t j = 0; j < r.parameters.size();) {
+    std::size_t k = j + 1;
+    const auto& name = r.parameters[j].name;
+    const bool per = name.find('@') != std::string::npos;
+    while (per && k < r.parameters.size() && mark(r.parameters[k].name) == mark(name)) ++k;
+    if (!per || k - j <= 4) {
+      for (std::size_t i = j; i < k; ++i)
+        out.push_back(fmt::format("{} = {}", r.parameters[i].name, value(r.parameters[i])));
+    } else {
+      double lo = r.parameters[j].value, hi = lo;
+      int bound = 0;
+      for (std::size_t i = j; i < k; ++i) {
+        lo = std::min(lo, r.parameters[i].value);
+        hi = std::max(hi, r.parameters[i].value);
+        bound += r.parameters[i].at_bound ? 1 : 0;
+      }
+      out.push_back(fmt::format("{}: {} channels, {:.4g} … {:.4g}{}", mark(name), k - j, lo, hi,
+                                bound > 0 ? fmt::format(" ({} at bound)", bound) : ""));
+    }
+    j = k;
+  }
+  out.push_back(fmt::format("χ²/dof = {:.4g} ({} dof)", r.chi2_per_dof, r.dof));
+  if (!r.naive.empty())
+    out.push_back(fmt::format("naive χ²/dof = {:.4g}", r.naive.front().chi2_per_dof));
+  if (r.chi2_per_dof > 2 && !r.misfit.empty()) {
+    const auto& m = r.misfit.front();
+    out.push_back(fmt::format("worst: θi = {:g}°, {} ({:.0f} % of χ²)", m.theta_i, m.region,
+                              100 * m.chi2_share));
+  }
+  return out;
+}
+
 void plot_fit(const std::string& path, const std::vector<CorrectedPoint>& points,
-              const std::string& title) {
+              const std::string& title, const FitResult& result) {
   std::map<double, std::vector<const CorrectedPoint*>> by_incidence;
   for (const auto& p : points) by_incidence[p.geometry.theta_i].push_back(&p);
   Figure fig;
   fig.title = title;
+  fig.notes = fit_notes(result);
   fig.width = 1000;
   fig.height = 750;
   fig.panels.reserve(2);
@@ -268,19 +314,18 @@ void add_fit(CLI::App& app) {
         std::cout << r.to_json().dump(2) << '\n';
       else
         write_fit_table(std::cout, r,
-                        fmt::format("fit of {} to {} through the {} twin", *model, data.source,
-                                    profile.name));
+                        r.nominal_directions
+                            ? fmt::format("fit of {} to {} at the nominal directions (a table "
+                                          "holds f at exact directions: no instrument)",
+                                          *model, data.source)
+                            : fmt::format("fit of {} to {} through the {} twin", *model,
+                                          data.source, profile.name));
       if (!corrected->empty() || !o->plot.empty()) {
         auto high = options;
         high.samples = std::max<std::uint64_t>(options.samples, 1u << 16);
         const auto points = correct(data, r.spec, profile, high);
         if (!corrected->empty()) write_corrected(*corrected, points, data.wavelengths, r.spec);
-        if (!o->plot.empty()) {
-          std::string fitted;
-          for (const auto& p : r.parameters)
-            fitted += fmt::format("{}{} = {:.5g}", fitted.empty() ? "" : ", ", p.name, p.value);
-          plot_fit(o->plot, points, "fit: " + fitted);
-        }
+        if (!o->plot.empty()) plot_fit(o->plot, points, "fit of " + *model, r);
       }
       return kExitOk;
     });

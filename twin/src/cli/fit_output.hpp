@@ -15,7 +15,7 @@ struct FitCliOptions {
   std::string measured;
   std::string profile = "gcms4";
   std::string calibration;
-  double table_u = 0.01;
+  TableUncertainty table_u;
   FitOptions fit;
   bool no_naive = false;
   bool json = false;
@@ -29,8 +29,12 @@ struct FitCliOptions {
 void write_fit_table(std::ostream& out, const FitResult& r, const std::string& title);
 // Measured ± u, the fitted virtual measurement, the fitted true β and the normalised
 // residuals, per incidence angle over θr (channel means).
+// The result's parameters, model and χ²/dof are listed beside the panels (a mark free per
+// channel as its range over the channels, so that any number of channels fits).
 void plot_fit(const std::string& path, const std::vector<CorrectedPoint>& points,
-              const std::string& title);
+              const std::string& title, const FitResult& result);
+// Those lines.
+std::vector<std::string> fit_notes(const FitResult& r);
 // CSV: one row per point and wavelength (geometry, measured, virtual, true, corrected).
 void write_corrected_csv(const std::string& path, const std::vector<CorrectedPoint>& points,
                          const WavelengthGrid& grid);

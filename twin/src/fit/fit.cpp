@@ -181,6 +181,9 @@ void FitOptions::validate() const {
   if (replicates < 4 || replicates > 256) throw Error::out_of_range("replicates", replicates, 4, 256);
   if (max_iterations < 1 || max_iterations > 1000)
     throw Error::out_of_range("max_iterations", max_iterations, 1, 1000);
+  if (starts < 0 || starts > 256) throw Error::out_of_range("starts", starts, 0, 256);
+  if (!(misfit_limit >= 1 && misfit_limit <= 1e6))
+    throw Error::out_of_range("misfit_limit", misfit_limit, 1, 1e6);
   if (!(tolerance > 0 && tolerance <= 0.1)) throw Error::out_of_range("tolerance", tolerance, 0, 0.1);
   if (!(correlation_limit > 0 && correlation_limit < 1))
     throw Error::out_of_range("correlation_limit", correlation_limit, 0, 1);
@@ -221,28 +224,50 @@ FitResult fit_material(const MeasuredData& data, std::string_view model,
     problem.group.push_back(group);
   }
 
-  // The naive fit first: cheap, and its result is a good start for the instrument fit.
-  std::vector<FitResult> naive;
-  if (options.naive) {
-    const auto t0 = Clock::now();
-    auto np = problem;
-    np.evaluate = [&](const std::vector<double>& x, std::vector<double>& beta,
-                      std::vector<double>& se) {
-      const auto bsdf = make_bsdf(tmpl.spec(x), grid);
-      std::vector<std::vector<double>> per(geo.unique.size());
-      for (std::size_t k = 0; k < geo.unique.size(); ++k) per[k] = nominal_beta(*bsdf, geo.unique[k]);
-      beta.clear();
-      for (const std::size_t k : geo.of_point) beta.insert(beta.end(), per[k].begin(), per[k].end());
-      se.assign(beta.size(), 0.0);
-    };
-    auto r = fit::solve(np, options);
+  // The model at the nominal directions: the naive fit, the global start, and the whole fit
+  // for data that are f at exact directions (tables).
+  auto nominal = problem;
+  nominal.evaluate = [&](const std::vector<double>& x, std::vector<double>& beta,
+                         std::vector<double>& se) {
+    const auto bsdf = make_bsdf(tmpl.spec(x), grid);
+    std::vector<std::vector<double>> per(geo.unique.size());
+    for (std::size_t k = 0; k < geo.unique.size(); ++k) per[k] = nominal_beta(*bsdf, geo.unique[k]);
+    beta.clear();
+    for (const std::size_t k : geo.of_point) beta.insert(beta.end(), per[k].begin(), per[k].end());
+    se.assign(beta.size(), 0.0);
+  };
+  const auto starts = fit::global_start(nominal, options);
+  for (std::size_t j = 0; j < starts.size(); ++j)
+    nominal.params[j].start = problem.params[j].start = starts[j];
+
+  const auto finish = [&](FitResult& r, const fit::Optimum& at, Clock::time_point t0) {
     r.kind = "fit";
     std::vector<double> x;
     for (const auto& p : r.parameters) x.push_back(p.value);
     r.spec = tmpl.spec(x);
     r.points = data.points.size();
     r.residuals = data.residuals();
+    r.misfit = fit::misfit_regions(data, at);
+    if (r.chi2_per_dof > options.misfit_limit) r.warnings.insert(r.warnings.begin(), fit::misfit_warning(r));
     r.seconds = seconds_since(t0);
+  };
+
+  if (data.exact_directions) {
+    fit::Optimum at;
+    auto r = fit::solve(nominal, options, &at);
+    r.nominal_directions = true;
+    finish(r, at, start);
+    return r;
+  }
+
+  // The naive fit first: cheap, and its result is a good start for the instrument fit.
+  std::vector<FitResult> naive;
+  if (options.naive) {
+    const auto t0 = Clock::now();
+    fit::Optimum at;
+    auto r = fit::solve(nominal, options, &at);
+    r.nominal_directions = true;
+    finish(r, at, t0);
     naive.push_back(std::move(r));
   }
 
@@ -254,15 +279,10 @@ FitResult fit_material(const MeasuredData& data, std::string_view model,
   // The naive optimum, when it converged inside the bounds, is a far better start than the
   // user's guess and costs no virtual measurement: the instrument fit starts there.
   if (!naive.empty() && naive.front().converged) start_from(problem, naive.front());
-  auto r = fit::solve(problem, options);
-  r.kind = "fit";
-  std::vector<double> x;
-  for (const auto& p : r.parameters) x.push_back(p.value);
-  r.spec = tmpl.spec(x);
-  r.points = data.points.size();
-  r.residuals = data.residuals();
+  fit::Optimum at;
+  auto r = fit::solve(problem, options, &at);
   r.naive = std::move(naive);
-  r.seconds = seconds_since(start);
+  finish(r, at, start);
   return r;
 }
 
@@ -285,6 +305,11 @@ FitResult calibrate(const MeasuredData& data, std::string_view sample_spec,
   profile.validate();
   check_grid(data);
   if (names.empty()) throw Error::invalid("fit", "name at least one instrument parameter to fit");
+  if (data.exact_directions)
+    throw Error(Errc::unsupported,
+                fmt::format("{} holds f at exact directions (a table), not readings of this "
+                            "instrument: there is nothing to calibrate against", data.source),
+                "measured");
   const auto& grid = data.wavelengths;
   const auto sample = make_bsdf(sample_spec, grid);
   const auto reference = make_bsdf(profile.reference_bsdf, grid);
@@ -383,7 +408,10 @@ FitResult calibrate(const MeasuredData& data, std::string_view sample_spec,
     scatter(geo, pred, v.gain, &rho, beta, se);
   };
   if (!naive.empty() && naive.front().converged) start_from(problem, naive.front());
-  auto r = fit::solve(problem, options);
+  fit::Optimum at;
+  auto r = fit::solve(problem, options, &at);
+  r.misfit = fit::misfit_regions(data, at);
+  if (r.chi2_per_dof > options.misfit_limit) r.warnings.insert(r.warnings.begin(), fit::misfit_warning(r));
   r.kind = "calibrate";
   r.spec = sample->spec();
   r.points = data.points.size();
@@ -410,18 +438,29 @@ std::vector<CorrectedPoint> correct(const MeasuredData& data, std::string_view f
   const auto& grid = data.wavelengths;
   const Twin twin(profile, make_bsdf(fitted_spec, grid), grid);
   const auto geo = distinct_geometries(data);
-  const auto pred = twin.predict_many(geo.unique, options.estimator_options(), options.threads);
+  // Data at exact directions are compared with the model there: nothing to correct.
+  const auto pred = data.exact_directions
+                        ? std::vector<Prediction>{}
+                        : twin.predict_many(geo.unique, options.estimator_options(), options.threads);
   std::vector<CorrectedPoint> out;
   for (std::size_t i = 0; i < data.points.size(); ++i) {
     const auto& m = data.points[i];
-    const auto& p = pred[geo.of_point[i]];
     CorrectedPoint c;
     c.geometry = m.geometry;
     c.measured = m.beta;
     c.measured_u = m.u;
+    c.true_beta = twin.true_beta(m.geometry);
+    if (data.exact_directions) {
+      c.virtual_beta = c.true_beta;
+      c.virtual_se.assign(c.true_beta.size(), 0.0);
+      c.corrected = m.beta;
+      c.corrected_u = m.u;
+      out.push_back(std::move(c));
+      continue;
+    }
+    const auto& p = pred[geo.of_point[i]];
     c.virtual_beta = p.beta;
     c.virtual_se = p.std_error;
-    c.true_beta = twin.true_beta(m.geometry);
     for (std::size_t k = 0; k < m.beta.size(); ++k) {
       const double ratio = p.beta[k] != 0 ? c.true_beta[k] / p.beta[k] : 1.0;
       c.corrected.push_back(m.beta[k] * ratio);
@@ -472,6 +511,16 @@ nlohmann::json FitResult::to_json() const {
                    {"spec", spec},
                    {"warnings", warnings},
                    {"degenerate", deg}};
+  nlohmann::json mis = nlohmann::json::array();
+  for (const auto& m : misfit)
+    mis.push_back({{"theta_i", m.theta_i},
+                   {"region", m.region},
+                   {"points", m.points},
+                   {"chi2_share", m.chi2_share},
+                   {"chi2_per_residual", m.chi2_per_residual},
+                   {"rms_relative", m.rms_relative}});
+  j["misfit"] = mis;
+  j["nominal_directions"] = nominal_directions;
   j["naive"] = naive.empty() ? nlohmann::json(nullptr) : naive.front().to_json();
   if (profile) j["profile"] = *profile;
   return j;

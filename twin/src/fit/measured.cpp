@@ -198,7 +198,12 @@ MeasuredData measured_from_json(const nlohmann::json& j, const std::string& sour
   return assemble(std::move(points), std::move(nms), source);
 }
 
-MeasuredData load_measured(const std::string& path, double table_rel_u) {
+void TableUncertainty::validate() const {
+  if (!(rel > 0 && rel <= 1)) throw Error::out_of_range("table_rel_u", rel, 0, 1);
+  if (!(abs >= 0 && abs <= 1)) throw Error::out_of_range("table_abs_u", abs, 0, 1);
+}
+
+MeasuredData load_measured(const std::string& path, const TableUncertainty& table_u) {
   const auto ext = lower_extension(path);
   if (ext == "csv") return parse_measured_csv(read_file(path), path);
   if (ext == "json") {
@@ -211,38 +216,53 @@ MeasuredData load_measured(const std::string& path, double table_rel_u) {
     return measured_from_json(j, path);
   }
   if (ext == "bsdf" || ext == "ssdd") {
-    if (!(table_rel_u > 0 && table_rel_u <= 1))
-      throw Error::out_of_range("table_rel_u", table_rel_u, 0, 1);
+    table_u.validate();
     const auto parts = ext == "bsdf" ? read_issa(path) : read_ssdd(path);
     if (!parts.brdf)
       throw Error(Errc::unsupported, path + ": the table holds no BRDF to fit", "measured");
     // Tables hold f on their own nodes, not the instrument's geometries: the points are
     // the plane of incidence at each tabulated incidence angle (p0 ≤ 85°), receiving
-    // angles −85…85° every 2.5°, evaluated through the table's own interpolation.
-    const WavelengthGrid grid = parts.brdf->wavelengths().empty()
+    // angles −85…85° every 2.5°, evaluated through the table's own interpolation where the
+    // table covers them. A geometry outside it would read as f = 0, which is no measurement.
+    const auto& t = *parts.brdf;
+    const WavelengthGrid grid = t.wavelengths().empty()
                                     ? WavelengthGrid(std::vector<double>{555.0})
-                                    : WavelengthGrid(parts.brdf->wavelengths());
-    const auto bsdf = load_bsdf_file(path, grid);
+                                    : WavelengthGrid(t.wavelengths());
     std::vector<MeasuredPoint> points;
     std::vector<std::vector<double>> nms;
-    for (const double ti : parts.brdf->axis(0)) {
+    std::size_t skipped = 0;
+    for (const double ti : t.axis(0)) {
       if (ti < 0 || ti > 85) continue;
       for (int k = -34; k <= 34; ++k) {
         const Geometry g = Geometry::in_plane(ti, 2.5 * k);
         const auto a = g.incident_direction();
         const auto b = g.receiving_direction();
-        std::vector<double> f(grid.size());
-        bsdf->eval({a[0], a[1], a[2]}, {b[0], b[1], b[2]}, f);
-        MeasuredPoint p{g, {}, {}};
-        for (double v : f) {
-          p.beta.push_back(kPi * v);
-          p.u.push_back(std::max(table_rel_u * kPi * std::abs(v), 1e-9));
+        const Vec3 wi{a[0], a[1], a[2]}, wo{b[0], b[1], b[2]};
+        const auto p = t.coords(wi, wo);
+        if (!t.covers(p)) {
+          ++skipped;
+          continue;
         }
-        points.push_back(std::move(p));
+        std::vector<double> f(t.channels());
+        t.interpolate(p, f);
+        MeasuredPoint m{g, {}, {}};
+        for (double v : f) {
+          const double beta = kPi * v;
+          m.beta.push_back(beta);
+          m.u.push_back(std::max(std::hypot(table_u.rel * beta, table_u.abs), 1e-12));
+        }
+        points.push_back(std::move(m));
         nms.push_back(grid.values());
       }
     }
-    return assemble(std::move(points), std::move(nms), path);
+    if (points.empty())
+      throw Error(Errc::unsupported,
+                  fmt::format("{}: the table covers none of the in-plane geometries ({} "
+                              "outside its measured extent)", path, skipped),
+                  "measured");
+    auto data = assemble(std::move(points), std::move(nms), path);
+    data.exact_directions = true;
+    return data;
   }
   throw Error::invalid("measured", fmt::format("'{}': unknown extension (allowed: .csv, .json, "
                                                ".bsdf, .ssdd)", path));

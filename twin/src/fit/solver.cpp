@@ -21,6 +21,7 @@
 #include <fmt/format.h>
 #include <unsupported/Eigen/LevenbergMarquardt>
 
+#include "core/sobol.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::twin::fit {
@@ -89,6 +90,16 @@ class Evaluator {
   struct State {
     std::vector<double> x, beta, se, sigma;
   };
+  // Whether the model accepts x (computing and caching it when it does).
+  bool feasible(const std::vector<double>& x) {
+    try {
+      at(x);
+      return true;
+    } catch (const Error& e) {
+      if (e.code() == Errc::internal) throw;
+      return false;
+    }
+  }
   // The model at x, cached for the last point asked for.
   const State& at(const std::vector<double>& x) {
     if (!cache_.x.empty() && cache_.x == x) return cache_;
@@ -121,7 +132,17 @@ class Evaluator {
       std::vector<double> h(n(), 0.0);
       for (std::size_t j = 0; j < n(); ++j)
         if (p_.group[j] == g) xp[j] += (h[j] = bounds_[j].step(x[j]));
-      const State moved = compute(xp);
+      State moved;
+      try {
+        moved = compute(xp);
+      } catch (const Error&) {
+        // The model refuses the step (a constraint between parameters, such as abg's
+        // energy): difference backwards instead.
+        xp = x;
+        for (std::size_t j = 0; j < n(); ++j)
+          if (p_.group[j] == g) xp[j] += (h[j] = -h[j]);
+        moved = compute(xp);
+      }
       for (std::size_t i = 0; i < m(); ++i) {
         const int c = static_cast<int>(i % p_.channels);
         for (std::size_t j = 0; j < n(); ++j) {
@@ -152,7 +173,14 @@ struct Functor : Eigen::DenseFunctor<double> {
     return x;
   }
   int operator()(const InputType& y, ValueType& f) const {
-    const auto& s = ev.at(x_of(y));
+    const auto x = x_of(y);
+    if (!ev.feasible(x)) {
+      // A trial point the model refuses: a residual far above any real one, so that the
+      // optimiser rejects the step and shortens its trust region.
+      f.setConstant(1e10);
+      return 0;
+    }
+    const auto& s = ev.at(x);
     for (std::size_t i = 0; i < ev.m(); ++i)
       f(static_cast<Eigen::Index>(i)) = (s.beta[i] - prob.measured[i]) / s.sigma[i];
     return 0;
@@ -173,9 +201,50 @@ struct Functor : Eigen::DenseFunctor<double> {
   mutable Eigen::MatrixXd last_jx;
 };
 
+// A parameter this close to a bound (share of its fitting range) is reported at the bound.
+constexpr double kBoundMargin = 5e-3;
+
+// One warning per parameter on a bound, or per mark for per-channel parameters
+// ("lambert.albedo@550"): "on a bound at 12 of 31 channels" rather than 12 warnings.
+void bound_warnings(const std::vector<FittedParameter>& params, const std::vector<int>& channel,
+                    std::vector<std::string>& out) {
+  std::vector<std::string> marks;
+  std::vector<std::pair<int, int>> counts;  // on a bound, of
+  std::vector<std::string> example;
+  for (std::size_t j = 0; j < params.size(); ++j) {
+    const auto& p = params[j];
+    const auto at = p.name.find('@');
+    if (channel[j] < 0 || at == std::string::npos) {
+      if (p.at_bound)
+        out.push_back(fmt::format("{} = {:g} is at a bound of [{:g}, {:g}]: the data push it "
+                                  "there, so it is no estimate and its uncertainty means "
+                                  "nothing; the model may not describe the data",
+                                  p.name, p.value, p.lo, p.hi));
+      continue;
+    }
+    const auto mark = p.name.substr(0, at);
+    auto it = std::find(marks.begin(), marks.end(), mark);
+    if (it == marks.end()) {
+      marks.push_back(mark);
+      counts.emplace_back(0, 0);
+      example.emplace_back();
+      it = marks.end() - 1;
+    }
+    const auto k = static_cast<std::size_t>(it - marks.begin());
+    ++counts[k].second;
+    if (p.at_bound && counts[k].first++ == 0)
+      example[k] = fmt::format("{} = {:g}", p.name, p.value);
+  }
+  for (std::size_t k = 0; k < marks.size(); ++k)
+    if (counts[k].first > 0)
+      out.push_back(fmt::format("{} is at a bound of its range at {} of {} channels (e.g. {}): "
+                                "no estimate there; the model may not describe the data",
+                                marks[k], counts[k].first, counts[k].second, example[k]));
+}
+
 }  // namespace
 
-FitResult solve(const Problem& problem, const FitOptions& options) {
+FitResult solve(const Problem& problem, const FitOptions& options, Optimum* at) {
   Evaluator ev(problem);
   const std::size_t n = ev.n(), m = ev.m();
   if (n == 0) throw Error::invalid("model", "no free parameter");
@@ -207,6 +276,12 @@ FitResult solve(const Problem& problem, const FitOptions& options) {
   for (std::size_t i = 0; i < m; ++i) {
     const double z = (state.beta[i] - problem.measured[i]) / state.sigma[i];
     chi2 += z * z;
+  }
+  if (at != nullptr) {
+    at->beta = state.beta;
+    at->z.resize(m);
+    for (std::size_t i = 0; i < m; ++i)
+      at->z[i] = (state.beta[i] - problem.measured[i]) / state.sigma[i];
   }
   r.chi2 = chi2;
   r.dof = static_cast<long>(m) - static_cast<long>(n);
@@ -262,20 +337,20 @@ FitResult solve(const Problem& problem, const FitOptions& options) {
     fp.name = p.name;
     fp.value = x[j];
     fp.start = p.start, fp.lo = p.lo, fp.hi = p.hi;
+    // Within half a percent of the range (in the fitting coordinate, log for log-scale
+    // parameters) of a bound: the optimiser may stop just short of the bound it is
+    // pressing against, and such a value is no estimate either.
     const double t = 0.5 * (1 + std::sin(y(static_cast<Eigen::Index>(j))));
-    fp.at_bound = t < 1e-6 || t > 1 - 1e-6;
+    fp.at_bound = t < kBoundMargin || t > 1 - kBoundMargin;
     fp.identifiable = !flat_param[j];
     const double var = cov(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j));
     fp.u = flat_param[j] ? std::numeric_limits<double>::quiet_NaN() : std::sqrt(var);
-    if (fp.at_bound)
-      r.warnings.push_back(fmt::format("{} = {:g} lies on a bound of [{:g}, {:g}]: its "
-                                       "uncertainty does not describe the fit", p.name,
-                                       fp.value, p.lo, p.hi));
     if (flat_param[j])
       r.warnings.push_back(fmt::format("{} is not identifiable: the data do not constrain it "
                                        "(a flat direction of chi2)", p.name));
     r.parameters.push_back(fp);
   }
+  bound_warnings(r.parameters, problem.channel, r.warnings);
   for (std::size_t a = 0; a < n; ++a)
     for (std::size_t b = a + 1; b < n; ++b)
       if (std::abs(r.correlation[a][b]) > options.correlation_limit &&
@@ -304,6 +379,56 @@ FitResult solve(const Problem& problem, const FitOptions& options) {
     r.degenerate.push_back(std::move(dg));
   }
   return r;
+}
+
+
+std::vector<double> global_start(const Problem& problem, const FitOptions& options) {
+  const std::size_t n = problem.params.size();
+  std::vector<double> best(n);
+  for (std::size_t j = 0; j < n; ++j) best[j] = problem.params[j].start;
+  std::vector<std::size_t> scalar;  // the parameters that act on every channel
+  for (std::size_t j = 0; j < n; ++j)
+    if (problem.channel[j] < 0) scalar.push_back(j);
+  if (scalar.empty() || options.starts <= 1) return best;
+
+  auto quick = options;
+  quick.max_iterations = 4;
+  double best_chi2 = std::numeric_limits<double>::infinity();
+  const auto& sobol = detail::SobolTable::get(static_cast<std::uint64_t>(options.starts) + 1);
+  for (int c = 0; c < options.starts; ++c) {
+    auto p = problem;
+    // Candidate 0 is the given start; the others are Sobol points 1, 2, … (point 1 is the
+    // centre of the box), kept 2 % away from the bounds.
+    if (c > 0) {
+      for (std::size_t d = 0; d < scalar.size(); ++d) {
+        auto& q = p.params[scalar[d]];
+        const std::uint32_t raw =
+            d < static_cast<std::size_t>(detail::kSobolDims)
+                ? sobol[static_cast<std::size_t>(c) * detail::kSobolDims + d]
+                : static_cast<std::uint32_t>(detail::mix64(c * 0x9E3779B97F4A7C15ull + d) >> 32);
+        const double t = 0.02 + 0.96 * (raw / 4294967296.0);
+        const bool log = q.log_scale && q.lo > 0;
+        const double a = log ? std::log(q.lo) : q.lo, b = log ? std::log(q.hi) : q.hi;
+        const double v = a + (b - a) * t;
+        q.start = std::clamp(log ? std::exp(v) : v, q.lo, q.hi);
+      }
+    }
+    FitResult r;
+    try {
+      r = solve(p, quick);
+    } catch (const Error&) {
+      continue;  // a candidate where the model fails is no start
+    }
+    if (!(r.chi2 < best_chi2)) continue;
+    best_chi2 = r.chi2;
+    for (std::size_t j = 0; j < n; ++j) {
+      const auto& q = problem.params[j];
+      // Just inside the bounds: the sine transformation has no gradient on them.
+      const double margin = 1e-3 * (q.hi - q.lo);
+      best[j] = std::clamp(r.parameters[j].value, q.lo + margin, q.hi - margin);
+    }
+  }
+  return best;
 }
 
 }  // namespace gonio::twin::fit

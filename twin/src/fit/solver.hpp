@@ -25,7 +25,24 @@ struct Problem {
 
 // Minimises Σ ((β(x) − m) / √(u² + se²))². Fills parameters, correlation, χ², dof,
 // iterations, evaluations, converged, status, warnings, degenerate (not points, seconds,
-// kind, spec).
-FitResult solve(const Problem& problem, const FitOptions& options);
+// kind, spec). `at`, when given, receives the model and the normalised residuals there.
+struct Optimum {
+  std::vector<double> beta, z;  // per residual: fitted β, (β − measured) / σ
+};
+FitResult solve(const Problem& problem, const FitOptions& options, Optimum* at = nullptr);
+
+// The regions of `data` (incidence × part of the receiving range) ordered by their share
+// of χ², worst first, at most `limit`.
+std::vector<MisfitRegion> misfit_regions(const MeasuredData& data, const Optimum& at,
+                                         std::size_t limit = 5);
+// The warning for a fit whose χ²/dof exceeds the limit, quoting its worst regions.
+std::string misfit_warning(const FitResult& r);
+
+// A start for the parameters that act on every channel, found before the local fit so
+// that a poor guess does not end in a degenerate corner: the given start and
+// options.starts − 1 points of a Sobol sequence over the bounded space (in the
+// parameters' fitting coordinates) each get a short Levenberg–Marquardt run of every
+// parameter, and the lowest χ² wins. Returns the start values of every parameter.
+std::vector<double> global_start(const Problem& problem, const FitOptions& options);
 
 }  // namespace gonio::twin::fit

@@ -159,9 +159,15 @@ ModelTemplate::ModelTemplate(std::string_view spec, const WavelengthGrid& grid)
     double start = m.start.value_or(p.fallback);
     if (m.start && (start < lo || start > hi))
       throw Error::out_of_range(field, start, lo, hi);
-    // A start on a bound would sit where the bounded transform is flat: move it inside.
-    start = std::clamp(start, lo + 1e-3 * (hi - lo), hi - 1e-3 * (hi - lo));
-    FreeParameter fp{f.name, start, lo, hi, lo > 0 && hi / lo >= 10};
+    // A start on a bound would sit where the bounded transform is flat: move it inside, by
+    // 10⁻³ of the range in the coordinate the parameter is fitted in.
+    const bool log_scale = lo > 0 && hi / lo >= 10;
+    if (log_scale)
+      start = std::exp(std::clamp(std::log(start), std::log(lo) + 1e-3 * std::log(hi / lo),
+                                  std::log(hi) - 1e-3 * std::log(hi / lo)));
+    else
+      start = std::clamp(start, lo + 1e-3 * (hi - lo), hi - 1e-3 * (hi - lo));
+    FreeParameter fp{f.name, start, lo, hi, log_scale};
     Mark mark{params_.size(), m.per_channel ? grid_.size() : 1};
     if (m.per_channel) {
       for (std::size_t c = 0; c < grid_.size(); ++c) {

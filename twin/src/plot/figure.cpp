@@ -90,6 +90,23 @@ double text_width(cairo_t* cr, const std::string& s) {
   return e.x_advance;
 }
 
+// The font size at which `s` fits `width` (at most `size`, at least `floor`), and `s` cut
+// with an ellipsis at UTF-8 boundaries if it does not fit even then. Leaves that font set.
+std::string fit_text(cairo_t* cr, std::string s, double width, double size, double floor,
+                     bool bold = false) {
+  font(cr, size, bold);
+  const double w = text_width(cr, s);
+  if (w <= width) return s;
+  font(cr, std::max(floor, size * width / w), bold);
+  if (text_width(cr, s) <= width) return s;
+  while (!s.empty() && text_width(cr, s + "…") > width) {
+    s.pop_back();
+    while (!s.empty() && (static_cast<unsigned char>(s.back()) & 0xC0) == 0x80) s.pop_back();
+    if (!s.empty() && (static_cast<unsigned char>(s.back()) & 0x80) != 0) s.pop_back();
+  }
+  return s + "…";
+}
+
 // Draws `s` with its anchor at (x, y): ha = 0 left, 0.5 centre, 1 right; the vertical
 // anchor is the middle of the font's cap height, so rows of labels line up.
 void text(cairo_t* cr, const std::string& s, double x, double y, double ha) {
@@ -368,10 +385,31 @@ void draw_figure(cairo_t* cr, const Figure& f) {
 
   double top = 0.8 * fs.base;
   if (!f.title.empty()) {
-    font(cr, fs.title, true);
+    const auto title = fit_text(cr, f.title, 0.96 * f.width, fs.title, 0.55 * fs.title, true);
     cairo_set_source_rgb(cr, 0, 0, 0);
-    text(cr, f.title, 0.5 * f.width, 1.3 * fs.title, 0.5);
+    text(cr, title, 0.5 * f.width, 1.3 * fs.title, 0.5);
     top = 2.4 * fs.title;
+  }
+
+  // The notes' column: as wide as its longest line at the legend's size, at most a third.
+  double width = f.width;
+  if (!f.notes.empty()) {
+    font(cr, fs.legend);
+    double w = 0;
+    for (const auto& n : f.notes) w = std::max(w, text_width(cr, n));
+    const double column = std::min(w, f.width / 3 - 1.2 * fs.base);
+    double size = fs.legend;
+    if (w > column) size = std::max(0.6 * fs.legend, fs.legend * column / w);
+    const double line = 1.35 * size;
+    width = f.width - column - 1.2 * fs.base;
+    cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
+    double y = top + fs.base;
+    for (const auto& n : f.notes) {
+      if (y > f.height - 0.5 * line) break;
+      const auto shown = fit_text(cr, n, column, size, size);
+      text(cr, shown, width + 0.4 * fs.base, y, 0);
+      y += line;
+    }
   }
 
   // Scales and tick labels first: the left margin is shared so that x axes line up.
@@ -390,7 +428,7 @@ void draw_figure(cairo_t* cr, const Figure& f) {
   for (std::size_t k = 0; k < f.panels.size(); ++k) {
     const Panel& p = f.panels[k];
     Layout& l = layouts[k];
-    l.area = {0, y, f.width, available * p.height_ratio / total_ratio};
+    l.area = {0, y, width, available * p.height_ratio / total_ratio};
     y += l.area.h;
     l.sx = make_scale(p.x, p.series, false);
     l.sy = make_scale(p.y, p.series, true);
@@ -406,7 +444,7 @@ void draw_figure(cairo_t* cr, const Figure& f) {
     const double head = p.title.empty() ? 0.9 * fs.base : 2.0 * fs.label;
     const double foot = 1.6 * fs.tick + (p.x.label.empty() && p.x.unit.empty() ? 0.4 * fs.base
                                                                              : 2.0 * fs.label);
-    l.plot = {left, l.area.y + head, f.width - left - 1.6 * fs.base, l.area.h - head - foot};
+    l.plot = {left, l.area.y + head, width - left - 1.6 * fs.base, l.area.h - head - foot};
     l.legend = legend_size(cr, p, fs.legend);
     const auto map_axes = [&] {
       l.sx.p0 = l.plot.x;

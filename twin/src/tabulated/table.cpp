@@ -316,6 +316,35 @@ void BsdfTable::interpolate(const std::array<double, 4>& p, std::span<double> ou
         }
 }
 
+bool BsdfTable::covers(const std::array<double, 4>& p) const noexcept {
+  if (values_.empty()) return false;
+  constexpr double kEps = 1e-9;
+  const auto inside = [](const std::vector<double>& n, double x) {
+    return n.size() < 2 || (x >= n.front() - kEps && x <= n.back() + kEps);
+  };
+  if (!inside(axes_.p0, p[0]) || !inside(axes_.p2, p[2])) return false;
+  const double period = p3_period(param_, reduction_);
+  const AxisPos pos[4] = {clamp_pos(axes_.p0, p[0]),
+                          isotropic() ? AxisPos{} : azimuth_pos(axes_.p1, p[1], 360.0, false),
+                          clamp_pos(axes_.p2, p[2]),
+                          azimuth_pos(axes_.p3, p[3], period, reduction_.bilateral)};
+  const std::size_t ch = channels();
+  for (int corner = 0; corner < 16; ++corner) {
+    std::size_t i[4];
+    bool used = true;
+    for (int k = 0; k < 4; ++k) {
+      const bool hi = (corner >> k) & 1;
+      const double w = hi ? pos[k].t : 1 - pos[k].t;
+      used = used && w != 0;
+      i[k] = hi ? pos[k].i1 : pos[k].i0;
+    }
+    if (!used) continue;
+    const double* v = values_.data() + index(i[0], i[1], i[2], i[3]) * ch;
+    if (std::all_of(v, v + ch, [](double x) { return x == 0; })) return false;
+  }
+  return true;
+}
+
 void BsdfTable::eval(const Vec3& wi, const Vec3& wo, std::span<double> out) const noexcept {
   interpolate(coords(wi, wo), out);
 }

@@ -93,6 +93,30 @@ const std::map<std::string, Expectations>& expectations() {
     auto& coat = m["coat"];
     for (double t : {20.0, 75.0}) coat.chi2.push_back({"alpha=0.05,ior=1.5", t, Binning::specular, 0.15});
     coat.energy = {"alpha=0.5,ior=4"};
+
+    // The layered diffuser: the diffuse base everywhere on the sphere, the interface's peak
+    // binned around it, a hazy interface, and the furnace at the extremes (white base,
+    // high index, the haze at full share).
+    auto& plastic = m["plastic"];
+    for (double t : {0.0, 50.0, 85.0, 130.0}) plastic.chi2.push_back({"albedo=0.8,alpha=0.3,ior=1.5", t});
+    for (double t : {20.0, 70.0}) plastic.chi2.push_back({"albedo=0,alpha=0.02,ior=1.5", t, Binning::specular, 0.06});
+    // (a narrow interface over a bright base is not binnable at once: the sphere binning
+    // cannot resolve the peak and the peak's binning not the base; the defaults' case
+    // covers the mixture at α = 0.05)
+    plastic.chi2.push_back({"albedo=0.5,alpha=0.05,ior=1.6,haze=0.4,haze_alpha=0.3", 40.0});
+    plastic.energy = {"albedo=1,alpha=0.001,ior=1.5", "albedo=1,alpha=1,ior=4",
+                      "albedo=400:0.1,700:1,alpha=0.2,ior=1.3,haze=1,haze_alpha=0.6",
+                      "albedo=1,alpha=0.3,ior=1"};
+    plastic.below = true;
+
+    // ABg: a narrow lobe (B small, binned around the peak), a broad one, Lambertian g = 0,
+    // and the furnace near the energy limit.
+    auto& abg = m["abg"];
+    for (double t : {0.0, 40.0, 80.0}) abg.chi2.push_back({"A=0.05,B=0.05,g=1.5", t});
+    abg.chi2.push_back({"A=0.2,B=0.5,g=0", 30.0});
+    abg.chi2.push_back({"A=0.01,B=0.0001,g=2", 30.0, Binning::specular, 0.05});
+    abg.energy = {"A=0.3,B=0.5,g=1", "A=0.3,B=1,g=0", "A=0.001,B=1e-6,g=2.5"};
+    abg.below = true;
     return m;
   }();
   return all;

@@ -45,6 +45,10 @@ struct MeasuredData {
   WavelengthGrid wavelengths;       // shared by every point
   std::vector<MeasuredPoint> points;
   std::string source;               // file name or description, for messages
+  // The values are f at exactly these directions (a tabulated BSDF: its instrument's
+  // optics are already in it or unknown), not readings through this instrument: a fit
+  // compares them with the model at the nominal directions.
+  bool exact_directions = false;
 
   std::size_t residuals() const noexcept { return points.size() * wavelengths.size(); }
   // Throws Error(invalid_argument) naming the first bad point or value.
@@ -59,10 +63,20 @@ MeasuredData parse_measured_csv(std::string_view text, const std::string& source
 // goniod's `scan.export --format json` ({"scan": ..., "points": [PointRecord...]}) or a
 // bare array of PointRecords.
 MeasuredData measured_from_json(const nlohmann::json& j, const std::string& source = "json");
-// By extension: .csv, .json, or a tabulated BSDF (.bsdf IS-SA, .ssdd) whose in-plane
-// reflection nodes become points with β = π f and u = table_rel_u · β (tables carry no
-// uncertainty). Errors: not_found, parse_error.
-MeasuredData load_measured(const std::string& path, double table_rel_u = 0.01);
+// What a table's values are given as uncertainty (tables carry none):
+// u = √((rel·β)² + abs²), so that zero and tiny values do not dominate χ².
+struct TableUncertainty {
+  double rel = 0.01;   // relative, (0, 1]
+  double abs = 0.002;  // absolute, in β (radiance factor), [0, 1]
+  void validate() const;
+};
+
+// By extension: .csv, .json, or a tabulated BSDF (.bsdf IS-SA, .ssdd). A table gives the
+// in-plane reflection geometries at each of its incidence angles ≤ 85° (receiving angles
+// −85…85° every 2.5°) that it covers (BsdfTable::covers: inside its measured extent, no
+// unmeasured node in the interpolation), with β = π f through its own interpolation, the
+// uncertainty `table`, and exact_directions set. Errors: not_found, parse_error.
+MeasuredData load_measured(const std::string& path, const TableUncertainty& table = {});
 
 // ---- the model with free parameters ------------------------------------------------------
 
@@ -123,6 +137,12 @@ struct FitOptions {
   double tolerance = 1e-6;           // relative change of parameters / χ² to stop
   bool naive = true;                 // also fit at the nominal directions (no instrument)
   double correlation_limit = 0.95;   // |ρ| above this: not separable
+  // Global start: candidates (the given start and Sobol points over the bounds) for the
+  // parameters acting on every channel, each refined briefly at the nominal directions
+  // before the fit proper; ≤ 1: the given start only.
+  int starts = 12;
+  // χ²/dof above this is a misfit: a warning names the worst regions.
+  double misfit_limit = 2;
   void validate() const;
   EstimatorOptions estimator_options() const;
 };
@@ -143,6 +163,18 @@ struct Degeneracy {
   double eigenvalue = 0;  // of the correlation matrix; ≈ 0: flat
 };
 
+// A region of the data: one incidence angle and one part of the receiving range.
+struct MisfitRegion {
+  double theta_i = 0;
+  // "specular" (within 10° of the mirror direction), "grazing" (θr > 70°, not specular),
+  // "backscatter" (the source's side of the normal), "diffuse" (the rest), "out-of-plane".
+  std::string region;
+  std::size_t points = 0;
+  double chi2_share = 0;   // of the total χ², 0–1
+  double chi2_per_residual = 0;
+  double rms_relative = 0; // RMS of (fitted − measured) / measured over its residuals
+};
+
 struct FitResult {
   std::string kind;                          // "fit" or "calibrate"
   std::vector<FittedParameter> parameters;   // in the order of the '?' marks / the list
@@ -160,6 +192,11 @@ struct FitResult {
   std::string spec;                          // fitted BSDF spec (fit) or the sample's (calibrate)
   std::vector<std::string> warnings;
   std::vector<Degeneracy> degenerate;
+  // Where the model misses the data most, worst first (at most 5): always given, the
+  // warning above misfit_limit quotes them.
+  std::vector<MisfitRegion> misfit;
+  // Fitted at the nominal directions, not through the instrument (exact_directions data).
+  bool nominal_directions = false;
   std::optional<InstrumentProfile> profile;  // calibrate: the corrected profile
   // The same fit with the model at the nominal directions (no instrument).
   std::vector<FitResult> naive;              // zero or one element

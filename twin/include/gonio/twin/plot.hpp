@@ -94,6 +94,10 @@ struct Figure {
   double width = 900;   // px for PNG, pt for SVG / PDF
   double height = 600;
   std::vector<Panel> panels;  // 1 to 4, top to bottom
+  // Lines of text in a column at the right of the panels (e.g. fitted parameters), at most
+  // a third of the width: the font shrinks until the longest line fits, and a line still
+  // too long is cut with an ellipsis. The title shrinks to the width the same way.
+  std::vector<std::string> notes;
 
   // Throws gonio::Error naming the offending field ("panels[1].series[0].sigma").
   void validate() const;

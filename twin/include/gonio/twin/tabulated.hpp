@@ -114,6 +114,11 @@ class BsdfTable {
   void interpolate(const std::array<double, 4>& p, std::span<double> out) const noexcept;
   // f(wi, wo) for every channel: interpolate(coords(wi, wo)).
   void eval(const Vec3& wi, const Vec3& wo, std::span<double> out) const noexcept;
+  // True when p lies inside the measured extent of the polar axes (p0, p2: no clamping to
+  // the last node) and every node the interpolation at p uses holds a non-zero value in some
+  // channel: a zero node is how tables from instruments mark a direction they did not
+  // measure (IS-SA files write directions below the horizon as 0). What a fit may take as data.
+  bool covers(const std::array<double, 4>& p) const noexcept;
 
   // The same table on other wavelengths (empty = grey: the channel mean).
   BsdfTable resampled(const std::vector<double>& nm) const;
