@@ -1,5 +1,6 @@
 // gonio-twin fit: material parameters fitted through the virtual instrument (twin/fitting.md).
 #include <cmath>
+#include <limits>
 #include <fstream>
 #include <iostream>
 #include <algorithm>
@@ -39,6 +40,13 @@ void FitCliOptions::add_to(CLI::App& app) {
       ->capture_default_str();
   app.add_option("--threads", fit.threads, "worker threads (0: all cores)")->capture_default_str();
   app.add_option("--max-iterations", fit.max_iterations, "Levenberg–Marquardt iterations")
+      ->capture_default_str();
+  app.add_option("--starts", fit.starts,
+                 "global start: candidates (the given start and Sobol points over the bounds) "
+                 "each refined briefly at the nominal directions; 1: the given start only")
+      ->capture_default_str();
+  app.add_option("--misfit-limit", fit.misfit_limit,
+                 "chi2/dof above which the fit warns that the model does not describe the data")
       ->capture_default_str();
   app.add_option("--table-u", table_u.rel,
                  "relative standard uncertainty given to tabulated input (tables carry none)")
@@ -182,22 +190,37 @@ void plot_fit(const std::string& path, const std::vector<CorrectedPoint>& points
       z.push_back(zz / static_cast<double>(std::max<std::size_t>(1, p->measured.size())));
     }
     const auto color = palette_color(k++);
-    auto& sm = beta.series.emplace_back(fmt::format("θi = {:g}° measured ± u", ti), x, m, mu);
+    // One legend entry per incidence (its colour); the line styles are explained once below.
+    auto& sm = beta.series.emplace_back(fmt::format("θi = {:g}°", ti), x, m, mu);
     sm.color = color;
     sm.line = LineStyle::none;
     sm.marker = Marker::circle;
     sm.marker_size = 4;
-    auto& sv = beta.series.emplace_back(fmt::format("θi = {:g}° fitted, virtual", ti), x, v);
+    auto& sv = beta.series.emplace_back("", x, v);
     sv.color = color;
-    auto& st = beta.series.emplace_back(fmt::format("θi = {:g}° fitted, true", ti), x, t);
-    st.color = color;
-    st.line = LineStyle::dashed;
+    if (!result.nominal_directions) {  // else virtual and true are the same curve
+      auto& st = beta.series.emplace_back("", x, t);
+      st.color = color;
+      st.line = LineStyle::dashed;
+    }
     auto& sz = res.series.emplace_back("", x, z);
     sz.color = color;
     sz.line = LineStyle::none;
     sz.marker = Marker::circle;
     sz.marker_size = 4;
   }
+  // The styles' legend entries: no data drawn, a grey sample of each style.
+  const auto style = [&](const std::string& label, LineStyle line, Marker marker) {
+    auto& s = beta.series.emplace_back(label, std::vector<double>{0.0},
+                                       std::vector<double>{std::numeric_limits<double>::quiet_NaN()});
+    s.color = Rgba{0.35, 0.35, 0.35, 1};
+    s.line = line;
+    s.marker = marker;
+    s.marker_size = 4;
+  };
+  style("measured ± u", LineStyle::none, Marker::circle);
+  style(result.nominal_directions ? "fitted model" : "fitted, virtual", LineStyle::solid, Marker::none);
+  if (!result.nominal_directions) style("fitted, true", LineStyle::dashed, Marker::none);
   write_figure(fig, path);
 }
 
