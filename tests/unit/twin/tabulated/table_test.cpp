@@ -354,3 +354,31 @@ TEST(TabulatedBsdf, FromPlainArrays) {
 
 }  // namespace
 }  // namespace gonio::twin
+
+namespace gonio::twin {
+namespace {
+
+// covers(): inside the polar axes' measured extent (no clamping to the last node), and no
+// all-zero node among those the interpolation uses.
+TEST(BsdfTable, CoversOnlyItsMeasuredExtentAndNonZeroNodes) {
+  const auto ax = small_axes();  // θi 0–60°, θo 0–80°, φ 0–270° (periodic)
+  const std::size_t n = 3 * 4 * 4;
+  auto v = consistent(random_values(n, 21), ax, 1);
+  const BsdfTable full(TableParam::spherical, ax, {}, v);
+  EXPECT_TRUE(full.covers({30, 0, 45, 90}));
+  EXPECT_TRUE(full.covers({60, 0, 80, 300}));    // on the last nodes; azimuth wraps
+  EXPECT_TRUE(full.covers({12.5, 0, 33, 135}));
+  EXPECT_FALSE(full.covers({61, 0, 45, 90}));    // beyond the last incidence
+  EXPECT_FALSE(full.covers({30, 0, 81, 90}));    // beyond the last polar angle
+  // A node marked unmeasured (0): the cells around it are not covered, the others are.
+  const std::size_t i0 = 1, i2 = 3, i3 = 2;    // θi 30°, θo 80°, φ 180°
+  v[full.index(i0, 0, i2, i3)] = 0;
+  const BsdfTable holed(TableParam::spherical, ax, {}, v);
+  EXPECT_FALSE(holed.covers({30, 0, 80, 180}));
+  EXPECT_FALSE(holed.covers({40, 0, 60, 200}));  // interpolates from it
+  EXPECT_TRUE(holed.covers({30, 0, 80, 90}));
+  EXPECT_TRUE(holed.covers({50, 0, 30, 180}));   // its θo cell is 20–45°: the node is not used
+}
+
+}  // namespace
+}  // namespace gonio::twin
