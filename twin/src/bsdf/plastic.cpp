@@ -44,6 +44,8 @@ class Plastic final : public Lobe {
         haze_(p.scalar("haze")),
         ior_(p.scalar("ior")) {
     tabulate_interface_albedo();
+    // Per channel, what f_d is without the interface's transmissions.
+    for (const double a : albedo_) base_.push_back(a / (1 - a * f_in_) * kInvPi / (ior_ * ior_));
   }
 
   void eval(const Vec3& wi_in, const Vec3& wo_in, std::span<double> out) const override {
@@ -53,9 +55,8 @@ class Plastic final : public Lobe {
       return;
     }
     const double fs = specular(*fr);
-    const double d = (1 - R(fr->wi.z)) * (1 - R(fr->wo.z)) * kInvPi / (ior_ * ior_);
-    for (std::size_t c = 0; c < out.size(); ++c)
-      out[c] = fs + d * albedo_[c] / (1 - albedo_[c] * f_in_);
+    const double d = (1 - R(fr->wi.z)) * (1 - R(fr->wo.z));
+    for (std::size_t c = 0; c < out.size(); ++c) out[c] = fs + d * base_[c];
   }
 
   std::optional<BsdfSample> sample_wi(const Vec3& wo, double u_lobe, Vec2 u) const override {
@@ -161,7 +162,7 @@ class Plastic final : public Lobe {
     return std::clamp(s / (s + d), 0.05, 0.95);
   }
 
-  std::vector<double> albedo_;
+  std::vector<double> albedo_, base_;
   double mean_albedo_;
   Microfacet sharp_, halo_;
   double haze_, ior_;

@@ -18,6 +18,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <utility>
 
 #include "gonio/twin/instrument.hpp"
 #include "gonio/twin/vec.hpp"
@@ -121,31 +122,57 @@ struct Polygon {
   }
 };
 
-// Keeps the part of `poly` where g·x ≤ c (Sutherland–Hodgman against one half-plane).
-inline void clip(Polygon& poly, Vec2 g, double c) noexcept {
-  if (poly.n == 0) return;
-  Polygon::Point out[Polygon::kMax];
+// Writes into `out` the part of `in` where g·x ≤ c (Sutherland–Hodgman against one
+// half-plane); returns false, leaving `out` as it was, when nothing is cut away.
+inline bool clip_into(const Polygon& in, Polygon& out, Vec2 g, double c) noexcept {
+  if (in.n == 0) return false;
   std::size_t m = 0;
   bool all_inside = true;
-  for (std::size_t i = 0; i < poly.n; ++i) {
-    const auto a = poly.v[i];
-    const auto b = poly.v[i + 1 == poly.n ? 0 : i + 1];
+  for (std::size_t i = 0; i < in.n; ++i) {
+    const auto a = in.v[i];
+    const auto b = in.v[i + 1 == in.n ? 0 : i + 1];
     const double da = g.x * a.x + g.y * a.y - c;
     const double db = g.x * b.x + g.y * b.y - c;
     if (da <= 0) {
-      out[m++] = a;
+      out.v[m++] = a;
     } else {
       all_inside = false;
     }
     if ((da < 0 && db > 0) || (da > 0 && db < 0)) {
       const double s = da / (da - db);
-      out[m++] = {a.x + s * (b.x - a.x), a.y + s * (b.y - a.y)};
+      out.v[m++] = {a.x + s * (b.x - a.x), a.y + s * (b.y - a.y)};
     }
     if (m + 2 > Polygon::kMax) break;  // cannot happen for convex inputs within capacity
   }
-  if (all_inside) return;
-  poly.n = m;
-  std::copy(out, out + m, poly.v);
+  if (all_inside) return false;
+  out.n = m;
+  return true;
+}
+
+// Keeps the part of `poly` where g·x ≤ c.
+inline void clip(Polygon& poly, Vec2 g, double c) noexcept {
+  Polygon out;
+  if (clip_into(poly, out, g, c)) poly = out;
+}
+
+// The 64-gon that stands for an ellipse in unit coordinates: its sides' directions
+// (cos θk, sin θk) and the distance r that gives it the ellipse's area.
+struct EqualAreaGon {
+  static constexpr int kSides = 64;
+  std::array<std::pair<double, double>, kSides> sides;
+  double r;
+};
+inline const EqualAreaGon& equal_area_gon() noexcept {
+  static const EqualAreaGon gon = [] {
+    EqualAreaGon g{};
+    for (int k = 0; k < EqualAreaGon::kSides; ++k) {
+      const double th = 2 * kPi * k / EqualAreaGon::kSides;
+      g.sides[static_cast<std::size_t>(k)] = {std::cos(th), std::sin(th)};
+    }
+    g.r = std::sqrt(kPi / (EqualAreaGon::kSides * std::tan(kPi / EqualAreaGon::kSides)));
+    return g;
+  }();
+  return gon;
 }
 
 // The footprint on the sample plane of a cross-section of an arm, for rays along ω.
@@ -172,13 +199,26 @@ class Footprint {
     }
     // Ellipse (X/hx)² + (Y/hy)² ≤ 1 as a circumscribed-and-shrunk 64-gon of equal area:
     // half-planes cos(θk)·X/hx + sin(θk)·Y/hy ≤ r with r chosen for equal area.
-    constexpr int kSides = 64;
-    const double r = std::sqrt(kPi / (kSides * std::tan(kPi / kSides)));
-    for (int k = 0; k < kSides; ++k) {
-      const double th = 2 * kPi * k / kSides;
-      const double cx = std::cos(th) / hx_, cy = std::sin(th) / hy_;
-      clip(poly, {cx * gt.x + cy * gp.x, cx * gt.y + cy * gp.y}, r);
+    const auto& gon = equal_area_gon();
+    // A polygon inside the 64-gon's inscribed circle (radius r) is not clipped by any side:
+    // the common case of a beam footprint well inside the field, 64 passes saved.
+    bool inside = true;
+    for (std::size_t i = 0; i < poly.n && inside; ++i) {
+      const double X = (gt.x * poly.v[i].x + gt.y * poly.v[i].y) / hx_;
+      const double Y = (gp.x * poly.v[i].x + gp.y * poly.v[i].y) / hy_;
+      inside = X * X + Y * Y <= gon.r * gon.r;
     }
+    if (inside) return;
+    // Ping-pong between two buffers: a side that cuts swaps them, none copies back and forth.
+    Polygon spare;
+    Polygon* cur = &poly;
+    Polygon* next = &spare;
+    for (const auto& [c, s] : gon.sides) {
+      const double cx = c / hx_, cy = s / hy_;
+      if (clip_into(*cur, *next, {cx * gt.x + cy * gp.x, cx * gt.y + cy * gp.y}, gon.r))
+        std::swap(cur, next);
+    }
+    if (cur != &poly) poly = *cur;
   }
   // Whether the sample-plane point x lies in the footprint for rays along ω.
   bool contains(const Vec2& x, const Vec3& w) const noexcept {
