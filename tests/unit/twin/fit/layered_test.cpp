@@ -184,6 +184,9 @@ TEST(Plastic, ALambertianBaseUnderACoatIsReportedAsAMisfit) {
 // both together about 0.85 — a test that fails one run in seven would be no test, so the
 // bound counts both parameters' 40 cases against 35).
 TEST(Plastic, UncertaintiesCoverTheTruthOverNoiseSeeds) {
+#ifndef NDEBUG
+  GTEST_SKIP() << "statistical target (20 fits): run in an optimised build";
+#endif
   const auto profile = InstrumentProfile::preset("gcms4");
   int within = 0, total = 0;
   double sum_z2 = 0;
