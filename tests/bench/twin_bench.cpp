@@ -3,13 +3,17 @@
 //     0.05, 0.01 (target ≤ 5 ms on one core for Lambert and α ≥ 0.1);
 //   - efficiency (1 / (variance × time)) of rqmc over baseline at the same geometry
 //     (target ≥ 50× for α ≤ 0.05);
-//   - a 1,000-geometry scan on 2 threads (target ≤ 10 s).
+//   - a 1,000-geometry scan on 2 threads (target ≤ 10 s);
+//   - a Jacobian of 200 candidate geometries × 3 parameters of a conductor α = 0.02 on
+//     2 threads (target ≤ 0.5 s), on shared paths (arg 1) and as four separate runs (arg 0).
 // Run: build/bench/bin/bench --benchmark_filter=Twin
 #include <benchmark/benchmark.h>
 
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <string>
+#include <vector>
 
 #include "gonio/twin/twin.hpp"
 
@@ -124,6 +128,68 @@ void BM_TwinScan1000(benchmark::State& state) {
   state.SetLabel(std::to_string(geometries.size()) + " geometries");
 }
 BENCHMARK(BM_TwinScan1000)->Arg(2)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
+
+// ∂β/∂(α, η, k) at 200 in-plane candidates (θi = 20, 40, 60°, θr every ~2° over ±70°, some on
+// the peaks) with a fixed budget of 4,096 paths per geometry and forward steps of 1 %: the
+// base and three stepped models, on shared paths (arg 1) or as four predict_many calls
+// (arg 0). Counters `err_alpha`, `err_eta`, `err_k`: the RMS error of each Jacobian column
+// against the same on shared paths at 16× the budget, relative to the column's RMS.
+void BM_TwinJacobian200(benchmark::State& state) {
+  const bool shared = state.range(0) == 1;
+  const auto& grid = grid31();
+  const auto spec = [](double a, double eta, double k) {
+    return "conductor:alpha=" + std::to_string(a) + ",eta=" + std::to_string(eta) + ",k=" + std::to_string(k);
+  };
+  const double a = 0.02, eta = 0.2, k = 3.9;
+  const Twin twin(InstrumentProfile{}, make_bsdf(spec(a, eta, k), grid), grid);
+  const std::vector<BsdfPtr> variants{make_bsdf(spec(a * 1.01, eta, k), grid),
+                                      make_bsdf(spec(a, eta * 1.01, k), grid),
+                                      make_bsdf(spec(a, eta, k * 1.01), grid)};
+  const double steps[3] = {0.01 * a, 0.01 * eta, 0.01 * k};
+  std::vector<Geometry> geometries;
+  for (double ti : {20.0, 40.0, 60.0})
+    for (int j = 0; j < 67 && geometries.size() < 200; ++j)
+      geometries.push_back(Geometry::in_plane(ti, -70 + 140.0 * j / 66));
+  EstimatorOptions o;
+  o.rel_se = 1e-6;  // unreachable: every geometry spends the fixed budget
+  o.max_samples = 4096;
+  o.replicates = 16;
+  const auto jacobian = [&](const std::vector<std::vector<Prediction>>& r) {
+    std::vector<std::vector<double>> J(3, std::vector<double>(r.size()));
+    for (std::size_t g = 0; g < r.size(); ++g)
+      for (std::size_t p = 0; p < 3; ++p) J[p][g] = (r[g][p + 1].beta[0] - r[g][0].beta[0]) / steps[p];
+    return J;
+  };
+  std::vector<std::vector<Prediction>> result;
+  for (auto _ : state) {
+    if (shared) {
+      result = twin.predict_variants(geometries, variants, o, 2);
+    } else {
+      std::vector<std::vector<Prediction>> runs;
+      runs.push_back(twin.predict_many(geometries, o, 2));
+      for (const auto& v : variants)
+        runs.push_back(Twin(InstrumentProfile{}, v, grid).predict_many(geometries, o, 2));
+      result.assign(geometries.size(), {});
+      for (std::size_t g = 0; g < geometries.size(); ++g)
+        for (auto& r : runs) result[g].push_back(r[g]);
+    }
+  }
+  auto fine = o;
+  fine.max_samples = 16 * o.max_samples;
+  const auto J = jacobian(result);
+  const auto Jref = jacobian(twin.predict_variants(geometries, variants, fine, 2));
+  const char* names[3] = {"err_alpha", "err_eta", "err_k"};
+  for (std::size_t p = 0; p < 3; ++p) {
+    double e2 = 0, r2 = 0;
+    for (std::size_t g = 0; g < geometries.size(); ++g) {
+      e2 += (J[p][g] - Jref[p][g]) * (J[p][g] - Jref[p][g]);
+      r2 += Jref[p][g] * Jref[p][g];
+    }
+    state.counters[names[p]] = r2 > 0 ? std::sqrt(e2 / r2) : 0;
+  }
+  state.counters["geometries"] = static_cast<double>(geometries.size());
+}
+BENCHMARK(BM_TwinJacobian200)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3)->UseRealTime();
 
 }  // namespace
 }  // namespace gonio::twin

@@ -64,11 +64,13 @@ MeasurementSetup make_setup(const InstrumentProfile& profile, const Geometry& no
 
 FluxEstimator::FluxEstimator(const MeasurementSetup& setup, const Bsdf& sample,
                              const Bsdf* reference, EstimatorKind kind, std::uint64_t seed,
-                             int replicates)
+                             int replicates, std::vector<const Bsdf*> variants)
     : setup_(setup), sample_(sample), reference_(reference), kind_(kind), seed_(seed),
       replicates_(replicates), channels_(sample.channels()),
       sums_(static_cast<std::size_t>(replicates) * channels_, 0.0),
       ref_sums_(static_cast<std::size_t>(replicates) * channels_, 0.0),
+      variants_(std::move(variants)),
+      variant_sums_(variants_.size() * static_cast<std::size_t>(replicates) * channels_, 0.0),
       sample_narrow_(narrow_at_aperture_scale(setup, sample, false)),
       reference_narrow_(reference && narrow_at_aperture_scale(setup, *reference, true)) {}
 
@@ -136,7 +138,21 @@ struct FluxEstimator::Accumulator {
   Accumulator(FluxEstimator& est, int r)
       : e(est), sample_sum(&est.sums_[static_cast<std::size_t>(r) * est.channels_]),
         ref_sum(&est.ref_sums_[static_cast<std::size_t>(r) * est.channels_]),
-        f(est.channels_), fr(est.channels_) {}
+        f(est.channels_), fr(est.channels_) {
+    for (std::size_t v = 0; v < est.variants_.size(); ++v)
+      variant_sum.push_back(&est.variant_sums_[(v * static_cast<std::size_t>(est.replicates_) +
+                                                static_cast<std::size_t>(r)) * est.channels_]);
+  }
+  std::vector<double*> variant_sum;
+
+  // Adds w·seen·f_v(wi, wo) to every variant's sums (the paths of the sample).
+  void add_variants(double ws, const Vec3& wi, const Vec3& wo) {
+    for (std::size_t v = 0; v < e.variants_.size(); ++v) {
+      e.variants_[v]->eval(wi, wo, fv);
+      for (std::size_t c = 0; c < e.channels_; ++c) variant_sum[v][c] += ws * fv[c];
+    }
+  }
+  std::vector<double> fv = std::vector<double>(e.channels_);
 
   // Adds w·seen·f to the sample sums; `lit` is the lit footprint on the sample for the
   // same directions (diagnostics: which fraction of it the receiver sees).
@@ -215,6 +231,7 @@ void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
         if (lit > 0) {
           sample_.eval(wi, wo, acc.f);
           acc.add_sample(base * w_sample, a_sample, lit, wi, wo, acc.f);
+          if (!variants_.empty() && a_sample > 0) acc.add_variants(base * w_sample * a_sample, wi, wo);
         }
       }
       if (reference_ && w_ref > 0 && seen_ref.n >= 3) {
@@ -271,6 +288,18 @@ void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
     };
     if (sample_delta) delta(sample_, wo, true);
     if (ref_delta) delta(*reference_, wo_ref, false);
+    // Each variant's own ideal specular paths (exact, so no sampling to share).
+    for (std::size_t v = 0; v < variants_.size(); ++v) {
+      if (!variants_[v]->has_delta()) continue;
+      variants_[v]->delta_lobes(wo, acc.lobes);
+      for (const auto& lobe : acc.lobes) {
+        Vec2 t;
+        if (!tangent_of(S.source, lobe.wi, t) || !S.source_aperture.contains_tangent(t)) continue;
+        const double a = seen.n >= 3 ? lit_area(seen, lobe.wi) : 0.0;
+        const double w = cos_o * inv_pdf_o * a;
+        for (std::size_t c = 0; c < channels_; ++c) acc.variant_sum[v][c] += w * lobe.weight[c];
+      }
+    }
   }
 }
 
@@ -311,6 +340,7 @@ void FluxEstimator::run_baseline(int r, std::uint64_t begin, std::uint64_t end) 
       if (on_sample) {
         sample_.eval(wi, wo, acc.f);
         acc.add_sample(w, 1, 0, wi, wo, acc.f);
+        acc.add_variants(w, wi, wo);
       }
       if (on_ref) {
         reference_->eval(wi, wo_ref, acc.fr);
@@ -331,6 +361,16 @@ void FluxEstimator::run_baseline(int r, std::uint64_t begin, std::uint64_t end) 
     };
     if (on_sample && sample_.has_delta()) delta(sample_, wo, true);
     if (on_ref && reference_->has_delta()) delta(*reference_, wo_ref, false);
+    for (std::size_t v = 0; on_sample && v < variants_.size(); ++v) {
+      if (!variants_[v]->has_delta()) continue;
+      variants_[v]->delta_lobes(wo, acc.lobes);
+      for (const auto& lobe : acc.lobes) {
+        Vec2 t;
+        if (!tangent_of(S.source, lobe.wi, t) || !S.source_aperture.contains_tangent(t)) continue;
+        if (!S.beam.contains(x, lobe.wi)) continue;
+        for (std::size_t c = 0; c < channels_; ++c) acc.variant_sum[v][c] += w_o * lobe.weight[c];
+      }
+    }
   }
 }
 

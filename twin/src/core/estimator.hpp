@@ -48,9 +48,15 @@ MeasurementSetup make_setup(const InstrumentProfile& profile, const Geometry& no
 
 class FluxEstimator {
  public:
-  // `reference` may be null (fixed calibration: the sample alone).
+  // `reference` may be null (fixed calibration: the sample alone). `variants` are further
+  // samples (the same grid) whose flux is estimated on the sample's own paths: the same
+  // directions, footprints and weights, which come from the sample's densities. The
+  // weights of the strategies still sum to one for every variant, so each estimate is
+  // unbiased, and the differences between them carry no Monte Carlo noise of their own
+  // beyond what the integrands' differences make (common random numbers, exactly).
   FluxEstimator(const MeasurementSetup& setup, const Bsdf& sample, const Bsdf* reference,
-                EstimatorKind kind, std::uint64_t seed, int replicates);
+                EstimatorKind kind, std::uint64_t seed, int replicates,
+                std::vector<const Bsdf*> variants = {});
 
   // Extends every replicate to `n` points (n a power of two for rqmc).
   void run_until(std::uint64_t n);
@@ -65,6 +71,12 @@ class FluxEstimator {
   double reference_flux(int r, std::size_t c) const noexcept {
     return ref_sums_[static_cast<std::size_t>(r) * channels_ + c] / static_cast<double>(n_);
   }
+  // Mean flux of variant v (0-based, in the order given), replicate r, channel c.
+  double variant_flux(std::size_t v, int r, std::size_t c) const noexcept {
+    return variant_sums_[(v * static_cast<std::size_t>(replicates_) + static_cast<std::size_t>(r)) *
+                             channels_ + c] / static_cast<double>(n_);
+  }
+  std::size_t variants() const noexcept { return variants_.size(); }
   bool has_reference() const noexcept { return reference_ != nullptr; }
   Diagnostics diagnostics() const;
 
@@ -83,6 +95,8 @@ class FluxEstimator {
   std::size_t channels_;
   std::uint64_t n_ = 0;
   std::vector<double> sums_, ref_sums_;
+  std::vector<const Bsdf*> variants_;
+  std::vector<double> variant_sums_;  // [variant][replicate][channel]
   // Diagnostics: flux-weighted sums (channel-mean weights).
   bool sample_narrow_ = false, reference_narrow_ = false;  // use BSDF sampling (MIS)
   double w_sum_ = 0, w_seen_ = 0, w_lit_ = 0, w_theta_i_ = 0, w_theta_r_ = 0;

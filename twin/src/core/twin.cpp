@@ -72,6 +72,38 @@ RatioStats ratio_stats(const std::vector<double>& num, const std::vector<double>
   return out;
 }
 
+// Runs job(i) for i < n on `threads` workers (0: hardware concurrency), each taking the
+// next index; the first exception stops the others and is rethrown.
+template <class Job>
+void for_each_geometry(std::size_t n, unsigned threads, const Job& job) {
+  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+  threads = static_cast<unsigned>(std::min<std::size_t>(threads, n));
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  const auto worker = [&] {
+    for (;;) {
+      const std::size_t i = next.fetch_add(1);
+      if (i >= n) return;
+      try {
+        job(i);
+      } catch (...) {
+        std::lock_guard lock(error_mutex);
+        if (!error) error = std::current_exception();
+        next = n;
+      }
+    }
+  };
+  if (threads <= 1) {
+    worker();
+  } else {
+    std::vector<std::thread> pool;
+    for (unsigned t = 0; t < threads; ++t) pool.emplace_back(worker);
+    for (auto& t : pool) t.join();
+  }
+  if (error) std::rethrow_exception(error);
+}
+
 }  // namespace
 
 void EstimatorOptions::validate() const {
@@ -128,6 +160,11 @@ struct Twin::FixedReference {
 };
 
 Prediction Twin::predict(const Geometry& g, const EstimatorOptions& options) const {
+  return std::move(predict_with(g, options, {}).front());
+}
+
+std::vector<Prediction> Twin::predict_with(const Geometry& g, const EstimatorOptions& options,
+                                           const std::vector<const Bsdf*>& variants) const {
   options.validate();
   g.validate();
   const auto start = std::chrono::steady_clock::now();
@@ -137,13 +174,16 @@ Prediction Twin::predict(const Geometry& g, const EstimatorOptions& options) con
 
   const auto setup = detail::make_setup(profile_, g);
   FluxEstimator est(setup, *sample_, fixed ? nullptr : reference_.get(), options.kind,
-                    geometry_seed(options.seed, g), R);
+                    geometry_seed(options.seed, g), R, variants);
 
-  Prediction out;
-  out.geometry = g;
-  out.wavelengths = grid_;
-  out.beta.assign(C, 0.0);
-  out.std_error.assign(C, 0.0);
+  std::vector<Prediction> all(1 + variants.size());
+  for (auto& p : all) {
+    p.geometry = g;
+    p.wavelengths = grid_;
+    p.beta.assign(C, 0.0);
+    p.std_error.assign(C, 0.0);
+  }
+  Prediction& out = all.front();
 
   // Fixed mode: the reference flux at the calibration geometry, carried by the correction.
   std::vector<double> ref_flux(C, 0.0), ref_rel_var(C, 0.0);
@@ -192,27 +232,31 @@ Prediction Twin::predict(const Geometry& g, const EstimatorOptions& options) con
   const std::uint64_t paths_per_point = static_cast<std::uint64_t>(R) * (fixed ? 1 : 2);
   std::uint64_t n = options.first_points;
   std::vector<double> num(static_cast<std::size_t>(R)), den(static_cast<std::size_t>(R));
+  // β and its s.e. of channel c for the sample (v = 0) or variant v − 1.
+  const auto estimate = [&](std::size_t v, std::size_t c, double& beta_out, double& se_out) {
+    for (int r = 0; r < R; ++r) {
+      num[static_cast<std::size_t>(r)] = v == 0 ? est.sample_flux(r, c) : est.variant_flux(v - 1, r, c);
+      den[static_cast<std::size_t>(r)] = fixed ? 1.0 : est.reference_flux(r, c);
+    }
+    const auto st = ratio_stats(num, &den);
+    double beta = 0, se = 0;
+    if (fixed) {
+      if (ref_flux[c] > 0) {
+        beta = st.value / ref_flux[c];
+        const double rel = st.value > 0 ? st.se / st.value : 0;
+        se = std::abs(beta) * std::sqrt(rel * rel + ref_rel_var[c]);
+      }
+    } else {
+      beta = st.value, se = st.se;
+    }
+    beta_out = beta * profile_.reference_beta;
+    se_out = se * profile_.reference_beta;
+  };
   for (;;) {
     est.run_until(n);
     bool converged = true;
     for (std::size_t c = 0; c < C; ++c) {
-      for (int r = 0; r < R; ++r) {
-        num[static_cast<std::size_t>(r)] = est.sample_flux(r, c);
-        den[static_cast<std::size_t>(r)] = fixed ? 1.0 : est.reference_flux(r, c);
-      }
-      const auto st = ratio_stats(num, &den);
-      double beta = 0, se = 0;
-      if (fixed) {
-        if (ref_flux[c] > 0) {
-          beta = st.value / ref_flux[c];
-          const double rel = st.value > 0 ? st.se / st.value : 0;
-          se = std::abs(beta) * std::sqrt(rel * rel + ref_rel_var[c]);
-        }
-      } else {
-        beta = st.value, se = st.se;
-      }
-      out.beta[c] = beta * profile_.reference_beta;
-      out.std_error[c] = se * profile_.reference_beta;
+      estimate(0, c, out.beta[c], out.std_error[c]);
       if (out.std_error[c] > std::max(options.rel_se * std::abs(out.beta[c]), options.abs_se))
         converged = false;
     }
@@ -220,12 +264,38 @@ Prediction Twin::predict(const Geometry& g, const EstimatorOptions& options) con
     if (converged || paths_per_point * n * 2 > options.max_samples) break;
     n *= 2;
   }
+  for (std::size_t v = 1; v < all.size(); ++v)
+    for (std::size_t c = 0; c < C; ++c) estimate(v, c, all[v].beta[c], all[v].std_error[c]);
   const auto diag = est.diagnostics();
   out.diagnostics.seen_fraction = diag.seen_fraction;
   out.diagnostics.mean_theta_i = diag.mean_theta_i;
   out.diagnostics.mean_theta_r = diag.mean_theta_r;
   out.samples = paths_per_point * est.points_per_replicate();
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  for (std::size_t v = 1; v < all.size(); ++v) {
+    all[v].diagnostics = out.diagnostics;
+    all[v].samples = out.samples;
+    all[v].seconds = out.seconds;
+  }
+  return all;
+}
+
+std::vector<std::vector<Prediction>> Twin::predict_variants(
+    const std::vector<Geometry>& geometries, const std::vector<BsdfPtr>& variants,
+    const EstimatorOptions& options, unsigned threads) const {
+  options.validate();
+  std::vector<const Bsdf*> raw;
+  for (std::size_t v = 0; v < variants.size(); ++v) {
+    if (!variants[v] || variants[v]->wavelengths() != grid_)
+      throw Error::invalid(fmt::format("variants[{}]", v),
+                           "must be a BSDF built for the twin's wavelength grid");
+    raw.push_back(variants[v].get());
+  }
+  for (std::size_t i = 0; i < geometries.size(); ++i)
+    geometries[i].validate(fmt::format("geometry[{}]", i));
+  std::vector<std::vector<Prediction>> out(geometries.size());
+  for_each_geometry(geometries.size(), threads,
+                    [&](std::size_t i) { out[i] = predict_with(geometries[i], options, raw); });
   return out;
 }
 
@@ -235,33 +305,9 @@ std::vector<Prediction> Twin::predict_many(const std::vector<Geometry>& geometri
   options.validate();
   for (std::size_t i = 0; i < geometries.size(); ++i)
     geometries[i].validate(fmt::format("geometry[{}]", i));
-  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
-  threads = static_cast<unsigned>(std::min<std::size_t>(threads, geometries.size()));
   std::vector<Prediction> out(geometries.size());
-  std::atomic<std::size_t> next{0};
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  const auto worker = [&] {
-    for (;;) {
-      const std::size_t i = next.fetch_add(1);
-      if (i >= geometries.size()) return;
-      try {
-        out[i] = predict(geometries[i], options);
-      } catch (...) {
-        std::lock_guard lock(error_mutex);
-        if (!error) error = std::current_exception();
-        next = geometries.size();
-      }
-    }
-  };
-  if (threads <= 1) {
-    worker();
-  } else {
-    std::vector<std::thread> pool;
-    for (unsigned t = 0; t < threads; ++t) pool.emplace_back(worker);
-    for (auto& t : pool) t.join();
-  }
-  if (error) std::rethrow_exception(error);
+  for_each_geometry(geometries.size(), threads,
+                    [&](std::size_t i) { out[i] = predict(geometries[i], options); });
   return out;
 }
 

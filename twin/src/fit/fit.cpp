@@ -276,6 +276,22 @@ FitResult fit_material(const MeasuredData& data, std::string_view model,
     const Twin twin(profile, make_bsdf(tmpl.spec(x), grid), reference, grid);
     scatter(geo, twin.predict_many(geo.unique, est, options.threads), 1.0, nullptr, beta, se);
   };
+  // A Jacobian's stepped models on the paths of the model at x (Twin::predict_variants).
+  problem.evaluate_steps = [&](const std::vector<std::vector<double>>& xs,
+                               std::vector<std::vector<double>>& beta,
+                               std::vector<std::vector<double>>& se) {
+    const Twin twin(profile, make_bsdf(tmpl.spec(xs[0]), grid), reference, grid);
+    std::vector<BsdfPtr> variants;
+    for (std::size_t k = 1; k < xs.size(); ++k) variants.push_back(make_bsdf(tmpl.spec(xs[k]), grid));
+    const auto pred = twin.predict_variants(geo.unique, variants, est, options.threads);
+    beta.assign(xs.size(), {});
+    se.assign(xs.size(), {});
+    std::vector<Prediction> column(pred.size());
+    for (std::size_t k = 0; k < xs.size(); ++k) {
+      for (std::size_t g = 0; g < pred.size(); ++g) column[g] = pred[g][k];
+      scatter(geo, column, 1.0, nullptr, beta[k], se[k]);
+    }
+  };
   // The naive optimum, when it converged inside the bounds, is a far better start than the
   // user's guess and costs no virtual measurement: the instrument fit starts there.
   if (!naive.empty() && naive.front().converged) start_from(problem, naive.front());

@@ -121,13 +121,62 @@ class Evaluator {
     }
     return s;
   }
+  // The stepped points of every group at once (evaluate_steps); empty when the problem
+  // has no such evaluation or the model refuses one of the steps.
+  std::vector<State> steps_at_once(const std::vector<double>& x, int groups,
+                                   std::vector<std::vector<double>>& h) {
+    if (!p_.evaluate_steps) return {};
+    std::vector<std::vector<double>> xs{x};
+    h.assign(static_cast<std::size_t>(groups), std::vector<double>(n(), 0.0));
+    for (int g = 0; g < groups; ++g) {
+      auto xp = x;
+      for (std::size_t j = 0; j < n(); ++j)
+        if (p_.group[j] == g) xp[j] += (h[static_cast<std::size_t>(g)][j] = bounds_[j].step(x[j]));
+      xs.push_back(std::move(xp));
+    }
+    std::vector<std::vector<double>> beta, se;
+    try {
+      p_.evaluate_steps(xs, beta, se);
+    } catch (const Error& e) {
+      if (e.code() == Errc::internal) throw;
+      return {};
+    }
+    evaluations_ += static_cast<int>(xs.size()) - 1;
+    std::vector<State> out;
+    for (std::size_t k = 1; k < xs.size(); ++k) {
+      State s;
+      s.x = xs[k];
+      s.beta = std::move(beta[k]);
+      s.se = std::move(se[k]);
+      if (s.beta.size() != m() || s.se.size() != m())
+        throw Error(Errc::internal, "the model returned the wrong number of values");
+      out.push_back(std::move(s));
+    }
+    return out;
+  }
+
   // Jacobian of the weighted residuals in x (scale[j] = dx/dy turns it into y).
   Eigen::MatrixXd jacobian(const std::vector<double>& x, const std::vector<double>& scale) {
     const State base = at(x);
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m()),
                                               static_cast<Eigen::Index>(n()));
     const int groups = n() == 0 ? 0 : *std::max_element(p_.group.begin(), p_.group.end()) + 1;
+    std::vector<std::vector<double>> shared_h;
+    const auto shared = steps_at_once(x, groups, shared_h);
     for (int g = 0; g < groups; ++g) {
+      if (!shared.empty()) {
+        const auto& moved = shared[static_cast<std::size_t>(g)];
+        const auto& h = shared_h[static_cast<std::size_t>(g)];
+        for (std::size_t i = 0; i < m(); ++i) {
+          const int c = static_cast<int>(i % p_.channels);
+          for (std::size_t j = 0; j < n(); ++j) {
+            if (p_.group[j] != g || (p_.channel[j] >= 0 && p_.channel[j] != c)) continue;
+            J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
+                (moved.beta[i] - base.beta[i]) / (h[j] * base.sigma[i]) * scale[j];
+          }
+        }
+        continue;
+      }
       auto xp = x;
       std::vector<double> h(n(), 0.0);
       for (std::size_t j = 0; j < n(); ++j)

@@ -21,6 +21,13 @@ struct Problem {
   // The model at parameter values x: β and its standard error at every residual.
   std::function<void(const std::vector<double>& x, std::vector<double>& beta,
                      std::vector<double>& se)> evaluate;
+  // Optional: the model at xs[0] and at the stepped points xs[1…] at once, the steps on the
+  // first point's random numbers (the twin's variants), so that a Jacobian's differences
+  // carry no Monte Carlo noise of their own and share the paths' cost. beta[0] and se[0]
+  // must equal what evaluate(xs[0]) gives.
+  std::function<void(const std::vector<std::vector<double>>& xs,
+                     std::vector<std::vector<double>>& beta,
+                     std::vector<std::vector<double>>& se)> evaluate_steps;
 };
 
 // Minimises Σ ((β(x) − m) / √(u² + se²))². Fills parameters, correlation, χ², dof,

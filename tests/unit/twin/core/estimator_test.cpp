@@ -248,3 +248,54 @@ TEST(Twin, RejectsBadOptionsAndGeometries) {
 
 }  // namespace
 }  // namespace gonio::twin
+
+namespace gonio::twin {
+namespace {
+
+// Variants on the sample's paths: the sample's own prediction is predict()'s, bit for bit;
+// a variant is unbiased (it agrees with its own predict() within their standard errors,
+// across seeds, including one narrower than the sample, which the sample's sampling serves
+// less well), and its standard error is honest.
+TEST(Twin, VariantsOnSharedPathsAreUnbiased) {
+  const auto base = std::make_shared<TestPhong>(kGrid, 0.6, 800.0);
+  const auto twin = make_twin(base);
+  const std::vector<BsdfPtr> variants{std::make_shared<TestPhong>(kGrid, 0.6, 800.0),
+                                      std::make_shared<TestPhong>(kGrid, 0.7, 900.0),
+                                      std::make_shared<TestPhong>(kGrid, 0.6, 1400.0)};
+  const std::vector<Geometry> gs{Geometry::in_plane(30, 30), Geometry::in_plane(30, 27),
+                                 Geometry::in_plane(55, 50)};
+  EstimatorOptions o;
+  o.rel_se = 2e-3;
+  const auto shared = twin.predict_variants(gs, variants, o, 2);
+  ASSERT_EQ(shared.size(), gs.size());
+  int inside = 0, total = 0;
+  for (std::size_t g = 0; g < gs.size(); ++g) {
+    ASSERT_EQ(shared[g].size(), 1 + variants.size());
+    const auto alone = twin.predict(gs[g], o);
+    EXPECT_EQ(shared[g][0].beta, alone.beta) << gs[g].to_string();
+    EXPECT_EQ(shared[g][1].beta, alone.beta) << "an identical variant is the sample";
+    for (std::size_t v = 1; v < variants.size(); ++v)
+      for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+        auto os = o;
+        os.seed = seed;
+        const auto a = twin.predict_variants({gs[g]}, variants, os, 1)[0][v + 1];
+        const auto b = make_twin(variants[v]).predict(gs[g], os);
+        const double se = std::hypot(a.std_error[0], b.std_error[0]);
+        EXPECT_GT(a.std_error[0], 0);
+        inside += std::abs(a.beta[0] - b.beta[0]) <= 3 * se ? 1 : 0;
+        ++total;
+      }
+  }
+  EXPECT_GE(inside, total - 1) << "of " << total;
+}
+
+TEST(Twin, VariantsOnAnotherGridAreRefused) {
+  const auto twin = make_twin(std::make_shared<TestPhong>(kGrid, 0.6, 800.0));
+  const auto other = WavelengthGrid::parse("500");
+  EXPECT_THROW(twin.predict_variants({Geometry::in_plane(30, 30)},
+                                     {std::make_shared<TestPhong>(other, 0.6, 800.0)}),
+               Error);
+}
+
+}  // namespace
+}  // namespace gonio::twin

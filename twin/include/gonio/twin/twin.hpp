@@ -77,10 +77,24 @@ class Twin {
                                        const EstimatorOptions& options = {},
                                        unsigned threads = 0) const;
 
+  // Predictions of this twin's sample and of `variants` (BSDFs on the same grid, e.g. the
+  // sample with one parameter stepped each: a Jacobian) traced on the same paths: the
+  // sample's directions, footprints, weights and reference readings. Each is unbiased (the
+  // weights of the strategies come from the sample's densities and still sum to one), the
+  // differences between them carry the common random numbers exactly, and the footprint
+  // clipping — most of a path's cost — is done once for all. Per geometry, the sample's
+  // prediction first (identical to predict()), then one per variant; the stopping rule is
+  // the sample's. Throws Error for a variant built on another grid.
+  std::vector<std::vector<Prediction>> predict_variants(const std::vector<Geometry>& geometries,
+                                                        const std::vector<BsdfPtr>& variants,
+                                                        const EstimatorOptions& options = {},
+                                                        unsigned threads = 0) const;
   // The true radiance factor π·f(ωi, ωr) at the nominal directions (no instrument).
   std::vector<double> true_beta(const Geometry& g) const;
 
  private:
+  std::vector<Prediction> predict_with(const Geometry& g, const EstimatorOptions& options,
+                                       const std::vector<const Bsdf*>& variants) const;
   InstrumentProfile profile_;
   BsdfPtr sample_;
   BsdfPtr reference_;
