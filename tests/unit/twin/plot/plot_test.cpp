@@ -335,3 +335,58 @@ TEST(Image, PngRoundTripAndErrors) {
 
 }  // namespace
 }  // namespace gonio::twin
+
+namespace gonio::twin {
+namespace {
+
+// Columns [x0, x1) of rows [y0, y1) that hold a dark (text) pixel.
+int dark_columns(const Image& img, int x0, int x1, int y0, int y1) {
+  int n = 0;
+  for (int x = x0; x < x1; ++x)
+    for (int y = y0; y < y1; ++y) {
+      const auto c = img.at(x, y);
+      if (c[0] < 128 && c[1] < 128 && c[2] < 128) {
+        ++n;
+        break;
+      }
+    }
+  return n;
+}
+
+// A title far longer than the figure shrinks (then is cut with an ellipsis) instead of
+// running off both ends; notes sit in their own column at the right, within the image, and
+// the panels make room for them.
+TEST(Plot, LongTitleAndNotesStayInsideTheImage) {
+  TempDir tmp;
+  auto f = error_map_like();
+  f.width = 800;
+  f.height = 500;
+  std::string title = "fit of lambert:albedo=";
+  for (int k = 0; k < 31; ++k) title += std::to_string(400 + 10 * k) + ":?,";
+  title += "+coat:alpha=?,ior=?";
+  f.title = title;
+  write_figure(f, tmp.file("title.png"));
+  const Image img = read_png(tmp.file("title.png"));
+  // The title band: text close to both ends is cut off text; the shrunk title leaves a
+  // margin of 2 % on each side.
+  const int band = 30;
+  EXPECT_EQ(dark_columns(img, 0, 10, 0, band), 0);
+  EXPECT_EQ(dark_columns(img, img.width - 10, img.width, 0, band), 0);
+  EXPECT_GT(dark_columns(img, 100, img.width - 100, 0, band), 300);  // the title is there
+
+  auto g = error_map_like();
+  g.width = 800;
+  g.height = 500;
+  for (int k = 0; k < 8; ++k) g.notes.push_back("lambert.albedo@" + std::to_string(400 + 10 * k) + " = 0.4321 ± 0.0012");
+  g.notes.push_back("a note far longer than a third of the figure's width, which must be shrunk and then cut");
+  write_figure(g, tmp.file("notes.png"));
+  write_figure(error_map_like(), tmp.file("plain.png"));
+  const Image with = read_png(tmp.file("notes.png"));
+  // The right third holds the notes' text; without notes it holds the plot and legend, and
+  // with them the plot area ends left of the column (its frame moves left).
+  EXPECT_GT(dark_columns(with, 2 * with.width / 3 + 10, with.width - 5, 40, 200), 50);
+  EXPECT_EQ(dark_columns(with, with.width - 3, with.width, 0, with.height), 0);
+}
+
+}  // namespace
+}  // namespace gonio::twin
