@@ -1,11 +1,14 @@
 // goniod start-up, run and shutdown (see daemon.hpp).
 #include "gonio/daemon/daemon.hpp"
 
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <malloc.h>
 #include <systemd/sd-daemon.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <csignal>
 #include <cstring>
 #include <fstream>
@@ -147,6 +150,27 @@ std::string axes_text(const drivers::SideCheck& s) {
   return text;
 }
 
+// Client work yields to the measurement. The threads that serve clients (the network's
+// I/O threads and the RPC workers) run kClientNice steps below the rest of goniod (the scan
+// runner, the twin's workers, the control methods' threads, MQTT, the archive), so that
+// under contention the kernel's fair scheduler gives them a weight of 110 against 1,024
+// (sched(7), the nice-to-weight table): about a tenth of a core that the runner also
+// wants, and all of any core it does not. Control methods keep the daemon's own priority.
+constexpr int kClientNice = 10;
+
+// Lowers the calling thread (Linux: setpriority on a thread id acts on that thread alone),
+// once per thread. Raising it back would need CAP_SYS_NICE, so it is never undone.
+void yield_to_measurement() {
+  thread_local bool lowered = false;
+  if (lowered) return;
+  lowered = true;
+  const auto tid = static_cast<id_t>(::gettid());
+  errno = 0;
+  const int now = ::getpriority(PRIO_PROCESS, tid);
+  if (errno == 0 && ::setpriority(PRIO_PROCESS, tid, std::min(19, now + kClientNice)) != 0)
+    spdlog::debug("cannot lower a client thread's priority: {}", std::strerror(errno));
+}
+
 }  // namespace
 
 int check_config(const DaemonOptions& o, std::ostream& out, std::ostream& err) {
@@ -269,7 +293,12 @@ int run_daemon(const DaemonOptions& o) {
     dispatch_limits.max_batch = config.max_batch;
     dispatch_limits.max_response_bytes = config.max_response_bytes;
     dispatch_limits.batch_window = config.max_in_flight;
-    rpc::Dispatcher dispatcher([&workers](std::function<void()> f) { asio::post(workers, std::move(f)); },
+    rpc::Dispatcher dispatcher([&workers](std::function<void()> f) {
+                                 asio::post(workers, [f = std::move(f)] {
+                                   yield_to_measurement();
+                                   f();
+                                 });
+                               },
                                [&control](std::function<void()> f) { asio::post(control, std::move(f)); },
                                dispatch_limits);
     dispatcher.set_principal_check([&auth](const Principal& p) { return auth.still_valid(p); });
@@ -394,7 +423,14 @@ int run_daemon(const DaemonOptions& o) {
     spdlog::info("goniod {} ready (state dir {})", GONIO_VERSION_STRING, state.string());
 
     std::vector<std::thread> io_threads;
-    for (int i = 1; i < config.io_threads; ++i) io_threads.emplace_back([&io] { io.run(); });
+    for (int i = 1; i < config.io_threads; ++i)
+      io_threads.emplace_back([&io] {
+        yield_to_measurement();
+        io.run();
+      });
+    // Everything that keeps the daemon's priority is started by now: this thread's lower
+    // priority is inherited only by what it starts from here on (the stopper at shutdown).
+    yield_to_measurement();
     io.run();
     for (auto& t : io_threads) t.join();
     if (stopper.joinable()) stopper.join();

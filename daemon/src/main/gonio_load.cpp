@@ -26,6 +26,7 @@
 #include <fcntl.h>
 #include <netinet/in.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/epoll.h>
 #include <sys/socket.h>
 #include <sys/time.h>
@@ -282,8 +283,15 @@ struct Hostile {
   }
 };
 
+// One method per client, taken in turn from `calls` (client i makes calls[i % n]).
+using Calls = std::vector<std::pair<std::string, json>>;
+
+// Nice increment of the client threads (--client-nice): clients on other machines take no
+// CPU from goniod; on the same machine, a positive value stands for that.
+int g_client_nice = 0;
+
 Result run_clients(const std::string& target, const std::string& uri, const std::string& token,
-                   std::size_t clients, double seconds, const std::string& method, const json& params) {
+                   std::size_t clients, double seconds, const Calls& calls) {
   Result res;
   res.target = target;
   res.clients = clients;
@@ -295,6 +303,7 @@ Result run_clients(const std::string& target, const std::string& uri, const std:
   Clock::time_point t_end;
   for (std::size_t i = 0; i < clients; ++i)
     threads.emplace_back([&, i] {
+      if (g_client_nice > 0) ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), g_client_nice);
       std::optional<Client> c;
       try {
         c.emplace(uri, std::chrono::seconds(10));
@@ -307,6 +316,7 @@ Result run_clients(const std::string& target, const std::string& uri, const std:
       while (!go.load()) std::this_thread::yield();
       if (!c) return;
       lat[i].reserve(100000);
+      const auto& [method, params] = calls[i % calls.size()];
       while (Clock::now() < t_end) {
         const auto t0 = Clock::now();
         try {
@@ -349,9 +359,23 @@ int main(int argc, char** argv) {
   app.add_option("--seconds", seconds, "duration of each target")->check(CLI::Range(0.2, 3600.0));
   app.add_option("--time-scale", time_scale, "the mock's real-time factor (keeps the scan running)");
   app.add_flag("--json", as_json, "print the figures as JSON");
-  bool hostile = false;
+  bool hostile = false, throughput = false;
+  app.add_option("--client-nice", g_client_nice,
+                 "run the client threads this much nicer (0–19): clients on another machine take "
+                 "no CPU from goniod")
+      ->check(CLI::Range(0, 19));
+  app.add_flag("--throughput", throughput,
+               "also measure the scan's points per second idle and under the clients (a long scan "
+               "on the mock at time scale 0)");
   app.add_flag("--hostile", hostile, "also measure goniod under hostile clients (peak RSS, control latency under an export flood)");
   CLI11_PARSE(app, argc, argv);
+  if (throughput) {
+    if (!connect.empty()) {
+      std::cerr << "gonio-load: --throughput starts its own goniod (not with --connect)\n";
+      return 2;
+    }
+    time_scale = 0;
+  }
 
   pid_t child = -1;
   fs::path dir;
@@ -406,9 +430,10 @@ int main(int argc, char** argv) {
     std::int64_t scan = 0;
     if (!dir.empty()) {
       admin.call("sample.create", json{{"name", "load"}, {"bsdf", gonio::daemon::kDemoSampleBsdf}});
+      // With --throughput, a scan long enough to outlast every phase at time scale 0.
       const auto s = admin.call("scan.submit", json{{"sample", "load"},
-                                                   {"grids", {"in=15,30,45,60;out=-5:80:1"}},
-                                                   {"repeats", 2}});
+                                                   {"grids", {throughput ? "in=15,30,45,60;out=-5:80:0.5" : "in=15,30,45,60;out=-5:80:1"}},
+                                                   {"repeats", throughput ? 40 : 2}});
       scan = s["id"].get<std::int64_t>();
       // Wait until the scan runs and has points to page through.
       for (int i = 0; i < 600; ++i) {
@@ -424,13 +449,40 @@ int main(int argc, char** argv) {
     std::vector<Result> results;
     {
       EchoServer echo;
-      results.push_back(run_clients("echo (baseline)", echo.uri(), "", clients, seconds, "system.info", json::object()));
+      results.push_back(run_clients("echo (baseline)", echo.uri(), "", clients, seconds, {{"system.info", json::object()}}));
     }
     const auto before = admin.call("system.info");
-    results.push_back(run_clients("system.info", uri, token, clients, seconds, "system.info", json::object()));
+    results.push_back(run_clients("system.info", uri, token, clients, seconds, {{"system.info", json::object()}}));
     if (scan)
-      results.push_back(run_clients("scan.points", uri, token, clients, seconds, "scan.points",
-                                    json{{"scan", scan}, {"offset", 0}, {"limit", 10}}));
+      results.push_back(run_clients("scan.points", uri, token, clients, seconds,
+                                    {{"scan.points", json{{"scan", scan}, {"offset", 0}, {"limit", 10}}}}));
+    // The runner's throughput: points per second of the running scan with no client, then
+    // with the clients split between system.info and scan.points, then idle again (the
+    // mean of the two idle rates is the reference; a drift between them is reported).
+    json throughput_out = nullptr;
+    if (throughput && scan) {
+      const auto done = [&] { return admin.call("scan.get", json{{"scan", scan}})["points_done"].get<double>(); };
+      const auto idle_rate = [&] {
+        const double a = done();
+        const auto t0 = Clock::now();
+        std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
+        return (done() - a) / std::chrono::duration<double>(Clock::now() - t0).count();
+      };
+      const double idle1 = idle_rate();
+      const double a = done();
+      auto r = run_clients("system.info + scan.points", uri, token, clients, seconds,
+                           {{"system.info", json::object()},
+                            {"scan.points", json{{"scan", scan}, {"offset", 0}, {"limit", 10}}}});
+      const double loaded = (done() - a) / r.seconds;
+      results.push_back(std::move(r));
+      const double idle2 = idle_rate();
+      const auto state = admin.call("scan.get", json{{"scan", scan}})["state"].get<std::string>();
+      if (state != "running")
+        throw std::runtime_error("the scan ended (" + state + ") before the throughput was measured: lower --seconds");
+      const double idle = 0.5 * (idle1 + idle2);
+      throughput_out = json{{"idle_points_per_s", idle}, {"idle_first", idle1}, {"idle_last", idle2},
+                            {"loaded_points_per_s", loaded}, {"loaded_over_idle", idle > 0 ? loaded / idle : 0}};
+    }
     const auto after = admin.call("system.info");
     const auto sc = scan ? admin.call("scan.get", json{{"scan", scan}}) : json(nullptr);
 
@@ -530,7 +582,8 @@ int main(int argc, char** argv) {
                         {"scan", sc},
                         {"points_during_run", after["runner"]["points_measured"].get<std::int64_t>() -
                                                   before["runner"]["points_measured"].get<std::int64_t>()},
-                        {"hostile", hostile_out}}
+                        {"hostile", hostile_out},
+                        {"throughput", throughput_out}}
                        .dump(2)
                 << "\n";
     } else {
@@ -542,6 +595,13 @@ int main(int argc, char** argv) {
           after["runner"]["points_measured"].get<std::int64_t>() - before["runner"]["points_measured"].get<std::int64_t>(),
           gonio::daemon::cell(runner["overhead_ms_p50"]), gonio::daemon::cell(runner["overhead_ms_p99"]),
           gonio::daemon::cell(runner["overhead_ms_max"]), gonio::daemon::cell(runner["overhead_window"]));
+      if (!throughput_out.is_null())
+        std::cout << fmt::format(
+            "throughput: the scan measured {:.1f} points/s idle ({:.1f} before, {:.1f} after) and {:.1f} "
+            "under {} clients: {:.0f} % of idle\n",
+            throughput_out["idle_points_per_s"].get<double>(), throughput_out["idle_first"].get<double>(),
+            throughput_out["idle_last"].get<double>(), throughput_out["loaded_points_per_s"].get<double>(), clients,
+            100 * throughput_out["loaded_over_idle"].get<double>());
       if (!hostile_out.empty()) {
         const auto& ctl = hostile_out["control"];
         std::cout << fmt::format(
