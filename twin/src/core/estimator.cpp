@@ -72,7 +72,33 @@ FluxEstimator::FluxEstimator(const MeasurementSetup& setup, const Bsdf& sample,
       variants_(std::move(variants)),
       variant_sums_(variants_.size() * static_cast<std::size_t>(replicates) * channels_, 0.0),
       sample_narrow_(narrow_at_aperture_scale(setup, sample, false)),
-      reference_narrow_(reference && narrow_at_aperture_scale(setup, *reference, true)) {}
+      reference_narrow_(reference && narrow_at_aperture_scale(setup, *reference, true)),
+      lobe_scale_(kind == EstimatorKind::rqmc ? lobe_scale(setup, sample) : 0.0) {}
+
+// The width of the sample's reflection lobe in the source aperture's tangent units, seen
+// from the receiver's axis: the offset from the mirror direction along the aperture's
+// in-plane axis at which f falls to a quarter of its value there (for GGX, (1 + r²/s²)⁻²,
+// that is r = s). 0 — no lobe strategy — when the lobe is not narrower than the aperture's
+// full width, when the mirror direction is behind the source arm, for an elliptical
+// aperture, and in transmission.
+double FluxEstimator::lobe_scale(const MeasurementSetup& s, const Bsdf& bsdf) {
+  if (s.source_aperture.ellipse || s.transmission) return 0;
+  const Vec3 wo = s.receiver.a;
+  Vec2 m;
+  if (!tangent_of(s.source, {-wo.x, -wo.y, wo.z}, m)) return 0;
+  std::vector<double> f(bsdf.channels());
+  const auto at = [&](double dx) {
+    bsdf.eval(direction_from_tangent(s.source, {m.x + dx, m.y}).w, wo, f);
+    return channel_mean(f);
+  };
+  const double f0 = at(0);
+  if (!(f0 > 0)) return 0;
+  const double tx = s.source_aperture.tx;
+  if (at(2 * tx) >= f0 / 4) return 0;
+  double d = tx;
+  for (int k = 0; k < 40 && at(d) < f0 / 4; ++k) d *= 0.8;
+  return d;
+}
 
 // Whether a BSDF varies on the scale of the source aperture for this geometry, i.e. whether
 // BSDF sampling can beat uniform aperture sampling anywhere in it. Probes the density of
@@ -244,14 +270,55 @@ void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
       }
     };
 
+    // Strategy 3, for a lobe narrower than the source aperture: ωi from truncated Cauchy
+    // densities about ωo's mirror direction in each tangent axis of the aperture (scale
+    // lobe_scale_). Every draw lies in the aperture and moves continuously with its
+    // uniforms — no acceptance test, unlike BSDF sampling — and the Cauchy tails (r⁻² per
+    // axis) are heavier than a microfacet lobe's (r⁻⁴). Off the peak, where the lobe reaches
+    // the aperture only at its edge nearest the mirror direction, it puts the draws there.
+    // All three strategies enter the balance heuristic (one draw each: Veach 1997, §9.2).
+    // pdf3_of: its density in solid angle at a direction (0 outside the aperture).
+    const bool cauchy = lobe_scale_ > 0;
+    double cx = 0, cy = 0, ax = 0, bx = 0, ay = 0, by = 0;
+    const double sc = lobe_scale_, tx = S.source_aperture.tx, ty = S.source_aperture.ty;
+    bool cauchy_ok = false;
+    if (cauchy) {
+      Vec2 m;
+      cauchy_ok = tangent_of(S.source, {-wo.x, -wo.y, wo.z}, m);
+      if (cauchy_ok) {
+        cx = m.x, cy = m.y;
+        ax = std::atan((-tx - cx) / sc), bx = std::atan((tx - cx) / sc);
+        ay = std::atan((-ty - cy) / sc), by = std::atan((ty - cy) / sc);
+      }
+    }
+    const auto pdf3_of = [&](const Vec3& wi) {
+      if (!cauchy_ok) return 0.0;
+      Vec2 t;
+      if (!tangent_of(S.source, wi, t) || !S.source_aperture.contains_tangent(t)) return 0.0;
+      const double zx = (t.x - cx) / sc, zy = (t.y - cy) / sc;
+      const double q = 1.0 / (sc * (bx - ax) * (1 + zx * zx)) / (sc * (by - ay) * (1 + zy * zy));
+      const double cg = dot(wi, S.source.a);
+      return q / (cg * cg * cg);
+    };
+    const bool mis_b = sample_narrow_;
     // Strategy 1: uniform over the source aperture.
     {
       const auto id = direction_from_tangent(S.source, aperture_point(S.source_aperture, u[4], u[5]));
       const double pdf1 = 1.0 / (src_area * id.cos_gamma3);
-      const double pdf2 = sample_narrow_ ? sample_.pdf(wo, id.w) : 0;
+      const double pdf2 = mis_b ? sample_.pdf(wo, id.w) : 0;
+      const double pdf3 = pdf3_of(id.w);
       const double pdf2r = reference_narrow_ ? reference_->pdf(wo_ref, id.w) : 0;
-      contribute(id.w, sample_narrow_ ? mis_weights(pdf1, pdf2).aperture : 1.0 / pdf1,
+      contribute(id.w, 1.0 / (pdf1 + pdf2 + pdf3),
                  reference_narrow_ ? mis_weights(pdf1, pdf2r).aperture : 1.0 / pdf1);
+    }
+    if (cauchy_ok) {
+      const Vec2 t{std::clamp(cx + sc * std::tan(ax + u[7] * (bx - ax)), -tx, tx),
+                   std::clamp(cy + sc * std::tan(ay + u[5] * (by - ay)), -ty, ty)};
+      const auto id = direction_from_tangent(S.source, t);
+      const double pdf1 = 1.0 / (src_area * id.cos_gamma3);
+      const double pdf2 = mis_b ? sample_.pdf(wo, id.w) : 0;
+      const double pdf3 = pdf3_of(id.w);
+      if (pdf3 > 0) contribute(id.w, 1.0 / (pdf1 + pdf2 + pdf3), 0);
     }
     // Strategy 2: BSDF importance sampling given wo, kept when it lands in the aperture.
     const auto bsdf_strategy = [&](const Bsdf& bsdf, const Vec3& wo_b, bool for_sample) {
@@ -261,7 +328,7 @@ void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
       if (!tangent_of(S.source, s->wi, t) || !S.source_aperture.contains_tangent(t)) return;
       const double cg = dot(s->wi, S.source.a);
       const double pdf1 = 1.0 / (src_area * cg * cg * cg);
-      const double w = mis_weights(pdf1, s->pdf).bsdf;
+      const double w = for_sample ? 1.0 / (pdf1 + s->pdf + pdf3_of(s->wi)) : mis_weights(pdf1, s->pdf).bsdf;
       if (w == 0) return;
       if (for_sample)
         contribute(s->wi, w, 0);
