@@ -24,9 +24,19 @@ double channel_mean(const std::vector<double>& v) {
   return v.empty() ? 0 : s / static_cast<double>(v.size());
 }
 
-// MIS weights divided by the pdf, for a candidate drawn by the aperture strategy and for
-// one drawn by BSDF sampling: the balance heuristic (Veach 1997, §9.2.2). (The power
-// heuristic measured worse here: the two densities overlap over most of a narrow lobe.)
+// The sample's MIS weight divided by the density of the strategy that drew the candidate
+// (p_this; p1…p3 the densities of all three at it, 0 for one not in use): the balance
+// heuristic 1 / Σp, or the power heuristic (β = 2) p_this / Σp² (Veach 1997, §9.2.2).
+// Measured at a fixed budget (variance ratio over 7 geometries per α): with the aperture
+// and the BSDF alone, the power heuristic wins 2.8–5× at the peak of an α = 0.02 lobe, as
+// it keeps the rare aperture draws that land in the lobe from counting; with the narrow-lobe
+// strategy as well, the balance heuristic wins off the peak (up to 5×).
+double mis_over_pdf(double p_this, double p1, double p2, double p3, bool power) {
+  return power ? p_this / (p1 * p1 + p2 * p2 + p3 * p3) : 1.0 / (p1 + p2 + p3);
+}
+
+// MIS weights divided by the pdf for the reference white, drawn by the aperture and by its
+// BSDF: the balance heuristic.
 struct MisWeights {
   double aperture = 0, bsdf = 0;
 };
@@ -301,6 +311,7 @@ void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
       return q / (cg * cg * cg);
     };
     const bool mis_b = sample_narrow_;
+    const bool power = sample_narrow_ && !cauchy;
     // Strategy 1: uniform over the source aperture.
     {
       const auto id = direction_from_tangent(S.source, aperture_point(S.source_aperture, u[4], u[5]));
@@ -308,7 +319,7 @@ void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
       const double pdf2 = mis_b ? sample_.pdf(wo, id.w) : 0;
       const double pdf3 = pdf3_of(id.w);
       const double pdf2r = reference_narrow_ ? reference_->pdf(wo_ref, id.w) : 0;
-      contribute(id.w, 1.0 / (pdf1 + pdf2 + pdf3),
+      contribute(id.w, mis_over_pdf(pdf1, pdf1, pdf2, pdf3, power),
                  reference_narrow_ ? mis_weights(pdf1, pdf2r).aperture : 1.0 / pdf1);
     }
     if (cauchy_ok) {
@@ -318,7 +329,7 @@ void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
       const double pdf1 = 1.0 / (src_area * id.cos_gamma3);
       const double pdf2 = mis_b ? sample_.pdf(wo, id.w) : 0;
       const double pdf3 = pdf3_of(id.w);
-      if (pdf3 > 0) contribute(id.w, 1.0 / (pdf1 + pdf2 + pdf3), 0);
+      if (pdf3 > 0) contribute(id.w, mis_over_pdf(pdf3, pdf1, pdf2, pdf3, power), 0);
     }
     // Strategy 2: BSDF importance sampling given wo, kept when it lands in the aperture.
     const auto bsdf_strategy = [&](const Bsdf& bsdf, const Vec3& wo_b, bool for_sample) {
@@ -328,14 +339,15 @@ void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
       if (!tangent_of(S.source, s->wi, t) || !S.source_aperture.contains_tangent(t)) return;
       const double cg = dot(s->wi, S.source.a);
       const double pdf1 = 1.0 / (src_area * cg * cg * cg);
-      const double w = for_sample ? 1.0 / (pdf1 + s->pdf + pdf3_of(s->wi)) : mis_weights(pdf1, s->pdf).bsdf;
+      const double w = for_sample ? mis_over_pdf(s->pdf, pdf1, s->pdf, pdf3_of(s->wi), power)
+                                  : mis_weights(pdf1, s->pdf).bsdf;
       if (w == 0) return;
       if (for_sample)
         contribute(s->wi, w, 0);
       else
         contribute(s->wi, 0, w);
     };
-    if (sample_narrow_) bsdf_strategy(sample_, wo, true);
+    if (mis_b) bsdf_strategy(sample_, wo, true);
     if (reference_narrow_) bsdf_strategy(*reference_, wo_ref, false);
 
     // Ideal specular paths, exactly.
