@@ -353,10 +353,15 @@ json Config::to_json() const {
                        {"home_timeout_s", in_seconds(home_timeout)},
                        {"measure_timeout_s", in_seconds(measure_timeout)},
                        {"settle_s", in_seconds(settle)},
+                       {"autorange", autorange},
+                       {"integration_min_ms", integration_min_ms},
+                       {"integration_max_ms", integration_max_ms},
+                       {"underexposed_snr", underexposed_snr},
                        {"auto_resume", auto_resume},
                        {"auto_resume_delay_s", in_seconds(auto_resume_delay)},
                        {"max_auto_resumes", max_auto_resumes},
                        {"limits", lim}};
+  if (integration_ms) doc["instrument"]["integration_ms"] = *integration_ms;
   if (!motion.empty()) doc["instrument"]["motion"] = motion;
   if (!photometer.empty()) doc["instrument"]["photometer"] = photometer;
   doc["twin"] = {{"threads", twin_threads},
@@ -538,6 +543,17 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
     c.home_timeout = seconds_in(r, "home_timeout_s", c.home_timeout, 0.1, 3600);
     c.measure_timeout = seconds_in(r, "measure_timeout_s", c.measure_timeout, 0.1, 3600);
     c.settle = seconds_in(r, "settle_s", c.settle, 0, 60);
+    c.autorange = r.optional<bool>("autorange", c.autorange);
+    if (r.has("integration_ms"))
+      c.integration_ms = r.optional_in<double>("integration_ms", 100, 0.001, 3600000, " ms");
+    c.integration_min_ms = r.optional_in<double>("integration_min_ms", c.integration_min_ms, 0.001, 3600000, " ms");
+    c.integration_max_ms = r.optional_in<double>("integration_max_ms", c.integration_max_ms, 0.001, 3600000, " ms");
+    if (c.integration_max_ms < c.integration_min_ms)
+      throw Error::invalid("instrument.integration_max_ms", "must be at least integration_min_ms");
+    if (c.integration_ms && (*c.integration_ms < c.integration_min_ms || *c.integration_ms > c.integration_max_ms))
+      throw Error::out_of_range("instrument.integration_ms", *c.integration_ms, c.integration_min_ms,
+                                c.integration_max_ms, " ms");
+    c.underexposed_snr = r.optional_in<double>("underexposed_snr", c.underexposed_snr, 0, 1e6);
     c.auto_resume = r.optional<bool>("auto_resume", c.auto_resume);
     c.auto_resume_delay = seconds_in(r, "auto_resume_delay_s", c.auto_resume_delay, 0, 86400);
     c.max_auto_resumes = static_cast<int>(r.optional_in<long long>("max_auto_resumes", c.max_auto_resumes, 0, 1000));

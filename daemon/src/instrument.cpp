@@ -186,6 +186,7 @@ void Instrument::open_side(Side s, bool at_start) {
         spdlog::error("instrument: {}", fault_reason_);
       }
       old = std::exchange(photometer_, std::move(p));
+      integration_set_.reset();  // a device opened again may have any setting
       photometer_grid_ = grid;
       photometer_identity_ = identity;
     }

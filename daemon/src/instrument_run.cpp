@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "gonio/daemon/autorange.hpp"
 #include "gonio/daemon/instrument.hpp"
 #include "gonio/daemon/point_reduction.hpp"
 #include "gonio/proto/error.hpp"
@@ -173,6 +174,24 @@ void Instrument::on_device_fault(const Error& e) {
   }
 }
 
+double Instrument::nominal_integration_ms() {
+  if (!config_.autorange || !photometer_->capabilities().settable_integration) return 0;
+  if (!nominal_integration_) {
+    // The configured setting, else the photometer's own as goniod first finds it (kept, so
+    // that a setting left short by ranging is not taken for the nominal one).
+    nominal_integration_ = config_.integration_ms ? *config_.integration_ms
+                                                  : photometer_->integration_ms(config_.measure_timeout);
+  }
+  return std::clamp(*nominal_integration_, config_.integration_min_ms, config_.integration_max_ms);
+}
+
+void Instrument::set_integration(double ms) {
+  if (integration_set_ && std::abs(*integration_set_ - ms) <= 1e-9 * ms) return;
+  integration_set_.reset();  // unknown until the device took it
+  photometer_->set_integration_ms(ms, config_.measure_timeout);
+  integration_set_ = ms;
+}
+
 void Instrument::move_arms(double incidence, double receive, std::optional<double> rotation) {
   double cur_i = 0, cur_r = 0;
   bool know = false;
@@ -261,15 +280,54 @@ void Instrument::step() {
       }
     });
     side = Side::photometer;
-    timed([&] { dark = photometer_->measure(Channel::dark, config_.measure_timeout); });
-    read_reference = !r.reference || plan.reads_reference(r.since_start);
-    if (read_reference) {
-      drivers::Reading ref;
-      timed([&] { ref = photometer_->measure(Channel::reference, config_.measure_timeout); });
-      r.reference = std::move(ref);
-      r.reference_dark = dark;
+    // Auto-ranging (autorange.hpp): from the nominal setting, shorter while saturated,
+    // longer while under-exposed; dark, reference and sample always at one setting.
+    const RangeLimits lim{config_.integration_min_ms, config_.integration_max_ms, config_.underexposed_snr};
+    if (!r.nominal_ms) timed([&] { r.nominal_ms = nominal_integration_ms(); });
+    const bool ranging = *r.nominal_ms > 0;
+    const bool due = !r.reference || plan.reads_reference(r.since_start);
+    double t = *r.nominal_ms;
+    std::optional<double> ceiling;
+    for (;;) {
+      if (ranging) timed([&] { set_integration(t); });
+      timed([&] { dark = photometer_->measure(Channel::dark, config_.measure_timeout); });
+      const bool ref_stale = ranging && r.reference && r.reference->integration_ms > 0 &&
+                             std::abs(r.reference->integration_ms - t) > 1e-9 * t;
+      if (due || ref_stale) {
+        drivers::Reading ref;
+        timed([&] {
+          ref = photometer_->measure(Channel::reference, config_.measure_timeout,
+                                     ranging ? drivers::SaturationPolicy::flag : drivers::SaturationPolicy::throw_error);
+        });
+        r.reference = std::move(ref);
+        r.reference_dark = dark;
+        read_reference = true;
+      }
+      timed([&] {
+        sample = photometer_->measure(Channel::sample, config_.measure_timeout,
+                                      ranging ? drivers::SaturationPolicy::flag : drivers::SaturationPolicy::throw_error);
+      });
+      if (!ranging) break;
+      const bool saturated = sample.saturated || r.reference->saturated;
+      const auto next = next_integration_ms(t, saturated, saturated ? 0 : best_channel_snr(sample, dark), ceiling, lim);
+      if (!next) {
+        if (saturated) {
+          // The shortest setting still saturates: only now a fault, naming the channel.
+          throw Error(Errc::saturated,
+                      fmt::format("detector saturated on the {} channel at {:g} ms, the shortest "
+                                  "integration time allowed (instrument.integration_min_ms); "
+                                  "attenuate the beam",
+                                  r.reference->saturated ? "reference" : "sample", t));
+        }
+        break;
+      }
+      if (saturated) ceiling = t;
+      spdlog::debug("scan {} point {}: {} at {:g} ms; reading again at {:g} ms", r.scan.id, idx,
+                    saturated ? "saturated" : "under-exposed", t, *next);
+      t = *next;
     }
-    timed([&] { sample = photometer_->measure(Channel::sample, config_.measure_timeout); });
+    if (sample.integration_ms > 0) p.integration_ms = sample.integration_ms;
+    else if (ranging) p.integration_ms = t;
     side = Side::motion;
     timed([&] { p.actual.theta_i = motion_->position(Axis::incidence, config_.move_timeout); });
     timed([&] { p.actual.theta_r = motion_->position(Axis::receive, config_.move_timeout); });
@@ -311,7 +369,11 @@ void Instrument::step() {
 
   // Reference white drift against the run's first reading (instrument health).
   if (read_reference) {
-    if (const auto drift = r.drift.observe(reduced->net_reference)) {
+    // Counts grow with the integration time: the drift compares counts per nominal setting.
+    auto net = reduced->net_reference;
+    if (r.nominal_ms.value_or(0) > 0 && r.reference->integration_ms > 0)
+      for (auto& v : net) v *= *r.nominal_ms / r.reference->integration_ms;
+    if (const auto drift = r.drift.observe(net)) {
       p.flags.push_back("reference_drift");
       alerts_.raise(AlertDraft{std::string(alert_kind::reference_drift), Severity::warning,
                                fmt::format("reference_drift:scan:{}", r.scan.id), r.scan.id,

@@ -210,6 +210,12 @@ class Instrument {
   std::string fault_reason_;
   std::optional<std::pair<std::int64_t, std::chrono::steady_clock::time_point>> auto_resume_;
   std::map<std::int64_t, int> auto_resumes_;
+  // Auto-ranging (runner thread): the nominal integration time once known, and the setting
+  // last given to the photometer (reset when the photometer is opened again).
+  std::optional<double> nominal_integration_;
+  std::optional<double> integration_set_;
+  double nominal_integration_ms();  // 0: no ranging
+  void set_integration(double ms);
   std::string state_ = "starting", state_detail_;
   std::unique_ptr<drivers::InstrumentOpener> opener_;
   Link links_[2];
