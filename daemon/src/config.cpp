@@ -342,7 +342,7 @@ json Config::to_json() const {
       list.push_back({{"name", t.name}, {"role", to_text(t.role)}, {"sha256", t.sha256}});
     doc["auth"] = {{"token", list}};
   }
-  doc["store"] = {{"synchronous", synchronous_full ? "full" : "normal"}};
+  doc["store"] = {{"synchronous", synchronous_full ? "full" : "normal"}, {"min_free_mb", min_free_mb}};
   json lim = {{"incidence", {limits.incidence_min, limits.incidence_max}},
               {"receive", {limits.receive_min, limits.receive_max}},
               {"rotation", {limits.rotation_min, limits.rotation_max}},
@@ -523,6 +523,7 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
     if (sync != "full" && sync != "normal")
       throw Error::invalid("store.synchronous", fmt::format("'{}' is not full or normal", sync));
     c.synchronous_full = sync == "full";
+    c.min_free_mb = r.optional_in<double>("min_free_mb", c.min_free_mb, 0, 1e7, " MiB");
     r.finish();
   }
 

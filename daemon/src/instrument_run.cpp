@@ -133,6 +133,13 @@ void Instrument::finish_run(ScanState state, const std::string& reason, const st
                  sc->reason.empty() ? "" : ": " + sc->reason);
   } catch (const Error& e) {
     spdlog::error("scan {}: cannot record state {}: {}", r->scan.id, to_text(state), e.what());
+    if (e.code() == Errc::storage_unavailable) {
+      // Published now, stored once the store can write (check_storage).
+      unsaved_state_ = UnsavedState{r->scan.id, state, reason, actor};
+      hub_.publish(Topic::state, "scan.state",
+                   json{{"scan", r->scan.id}, {"state", to_text(state)}, {"reason", reason}, {"stored", false}},
+                   r->scan.id);
+    }
   }
   if (sc)
     hub_.publish(Topic::progress, "scan.progress",
@@ -190,6 +197,80 @@ void Instrument::set_integration(double ms) {
   integration_set_.reset();  // unknown until the device took it
   photometer_->set_integration_ms(ms, config_.measure_timeout);
   integration_set_ = ms;
+}
+
+void Instrument::on_storage_fault(const Error& e) {
+  std::int64_t id = 0;
+  {
+    std::lock_guard lock(mu_);
+    id = run_ ? run_->scan.id : 0;
+  }
+  const auto reason = fmt::format("storage: {}; free space, then resume the scan", e.what());
+  spdlog::error("scan {}: {}", id, reason);
+  // The pause and its alert may use the store's reserve; without one (a read-only file
+  // system) the alert is held in memory and published, the state stored later.
+  Store::Essential essential;
+  alerts_.raise(AlertDraft{std::string(alert_kind::storage), Severity::critical, "storage:unwritable", id,
+                           std::nullopt, std::nullopt, fmt::format("scan {} paused: {}", id, reason)});
+  std::lock_guard sched(sched_mu_);
+  finish_run(ScanState::paused, reason, "goniod");
+}
+
+void Instrument::check_storage() {
+  const auto now = std::chrono::steady_clock::now();
+  if (now - storage_checked_ < std::chrono::seconds(1)) return;
+  storage_checked_ = now;
+  if (!store_.writable() && !store_.probe()) return;
+  alerts_.flush_held();
+  {
+    std::lock_guard sched(sched_mu_);
+    if (unsaved_state_) {
+      try {
+        const auto u = *unsaved_state_;
+        transition(u.scan, u.state, u.reason, u.actor);
+        unsaved_state_.reset();
+        spdlog::info("scan {}: state {} stored now that the store can write", u.scan, to_text(u.state));
+      } catch (const Error& e) {
+        spdlog::warn("scan {}: state still not stored: {}", unsaved_state_->scan, e.what());
+      }
+    }
+    if (recover_reason_) {
+      try {
+        for (const auto id : store_.recover_running(*recover_reason_))
+          spdlog::warn("scan {} was running when goniod last stopped; it resumes first", id);
+        recover_reason_.reset();
+      } catch (const Error& e) {
+        spdlog::warn("store: scans left running not recovered yet: {}", e.what());
+      }
+    }
+  }
+  const auto s = store_.storage();
+  if (s.low && !low_space_) {
+    low_space_ = true;
+    const auto msg = fmt::format("low space: {}; no new scan starts until {:.0f} MiB are free (store.min_free_mb)",
+                                 describe_space(s.dir, s.space), static_cast<double>(s.min_free_bytes) / (1 << 20));
+    spdlog::warn("store: {}", msg);
+    alerts_.raise(AlertDraft{std::string(alert_kind::storage), Severity::warning, "storage:low", std::nullopt,
+                             std::nullopt, std::nullopt, msg});
+  } else if (!s.low && low_space_) {
+    low_space_ = false;
+    spdlog::info("store: space is back ({})", describe_space(s.dir, s.space));
+  }
+}
+
+json Instrument::storage_json() const {
+  const auto s = store_.storage();
+  json held = json::array();
+  for (const auto& a : alerts_.held()) held.push_back(a);
+  return json{{"dir", s.dir.string()},
+              {"free_mb", s.space.known ? json(static_cast<double>(s.space.free_bytes) / (1 << 20)) : json(nullptr)},
+              {"read_only_fs", s.space.read_only},
+              {"writable", s.writable},
+              {"low", s.low},
+              {"fault", s.fault},
+              {"min_free_mb", static_cast<double>(s.min_free_bytes) / (1 << 20)},
+              {"reserve", s.reserve},
+              {"unsaved_alerts", std::move(held)}};
 }
 
 void Instrument::move_arms(double incidence, double receive, std::optional<double> rotation) {
@@ -422,6 +503,10 @@ void Instrument::step() {
   try {
     store_.insert_point(p, point_text);
   } catch (const Error& e) {
+    if (e.code() == Errc::storage_unavailable) {
+      on_storage_fault(e);  // not stored, not published: measured again after the resume
+      return;
+    }
     if (e.code() == Errc::invalid_state) {
       spdlog::warn("scan {}: {}; skipping it", r.scan.id, e.what());  // never store twice
     } else {

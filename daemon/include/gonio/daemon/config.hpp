@@ -128,6 +128,9 @@ struct Config {
 
   // [store]
   bool synchronous_full = true;  // "full": fsync every committed point; "normal": WAL default
+  // Below this much free space in the state directory a `storage` warning is raised and no
+  // new scan starts; a store made read-only by a full disk writes again above it (+ reserve).
+  double min_free_mb = 64;
 
   // [instrument]
   std::string profile = "gcms4";  // preset name or JSON profile path
