@@ -389,6 +389,14 @@ Store::ReadLease Store::read() const {
       return ReadLease(*this, std::move(c));
     }
   }
+  // On a read-only file system a WAL database without its -shm index cannot be opened as
+  // usual; with no -wal either (goniod stopped cleanly) the file is complete and cannot
+  // change, which is what SQLite's immutable mode is for.
+  if (immutable_reads_) {
+    auto c = std::make_unique<Connection>(
+        std::filesystem::path("file:" + path_.string() + "?immutable=1"), SQLITE_OPEN_READONLY | SQLITE_OPEN_URI);
+    return ReadLease(*this, std::move(c));
+  }
   auto c = std::make_unique<Connection>(path_, SQLITE_OPEN_READONLY);
   return ReadLease(*this, std::move(c));
 }
@@ -406,6 +414,9 @@ Store::Store(const std::filesystem::path& file, bool synchronous_full)
     // A full disk at start: goniod serves what is stored, read-only (storage.hpp).
     if (e.code() != Errc::storage_unavailable) throw;
     spdlog::error("store: opened read-only: {}", e.what());
+    std::error_code ec;
+    if (space_of(state_dir()).read_only && !std::filesystem::exists(path_.string() + "-wal", ec))
+      immutable_reads_ = true;
   }
   // A disk already full at start: read-only from the outset rather than at the first write
   // that happens not to fit in the pages SQLite has already allocated.
@@ -514,6 +525,20 @@ bool Store::probe() {
   if (writable()) return true;
   try {
     std::lock_guard lock(write_mu_);
+    if (sqlite3_db_readonly(writer_->db, "main") == 1) {
+      // Opened on a read-only file system: SQLite fell back to reading. Open it again for
+      // writing once the file system allows it.
+      before_write();
+      auto w = std::make_unique<Connection>(path_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+      w->owner = this;
+      w->exec("PRAGMA journal_mode = WAL");
+      w->exec(synchronous_full_ ? "PRAGMA synchronous = FULL" : "PRAGMA synchronous = NORMAL");
+      w->exec("PRAGMA foreign_keys = ON");
+      writer_ = std::move(w);
+      immutable_reads_ = false;
+      std::lock_guard pool(pool_mu_);
+      readers_.clear();
+    }
     Transaction t(*writer_);
     audit_in(*writer_, "goniod", "store.writable", "", json::object());
     t.commit();

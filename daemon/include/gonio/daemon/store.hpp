@@ -293,6 +293,7 @@ class Store {
   mutable std::vector<std::unique_ptr<Connection>> readers_;
   std::atomic<bool> outbox_on_{false};
   std::atomic<bool> read_only_{false};
+  std::atomic<bool> immutable_reads_{false};  // a read-only file system at open
   mutable std::mutex space_mu_;
   std::string fault_;
   std::uint64_t min_free_bytes_ = 64ull << 20;
