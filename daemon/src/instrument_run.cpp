@@ -369,8 +369,25 @@ void Instrument::step() {
     const bool due = !r.reference || plan.reads_reference(r.since_start);
     double t = *r.nominal_ms;
     std::optional<double> ceiling;
+    std::optional<double> kept;  // the setting of the readings in hand, while ranging further
     for (;;) {
-      if (ranging) timed([&] { set_integration(t); });
+      if (ranging) {
+        try {
+          timed([&] { set_integration(t); });
+        } catch (const Error& e) {
+          // The photometer's own limits are narrower than the configured ones.
+          if (e.code() != Errc::out_of_range) throw;
+          if (ceiling && t < *ceiling)
+            throw Error(Errc::saturated,
+                        fmt::format("detector saturated at {:g} ms and the photometer refuses a shorter "
+                                    "integration time ({}); attenuate the beam",
+                                    *ceiling, e.what()));
+          if (!kept) throw;
+          t = *kept;  // a longer setting refused: keep the readings at the last one
+          integration_set_.reset();
+          break;
+        }
+      }
       timed([&] { dark = photometer_->measure(Channel::dark, config_.measure_timeout); });
       const bool ref_stale = ranging && r.reference && r.reference->integration_ms > 0 &&
                              std::abs(r.reference->integration_ms - t) > 1e-9 * t;
@@ -403,6 +420,7 @@ void Instrument::step() {
         break;
       }
       if (saturated) ceiling = t;
+      else kept = t;
       spdlog::debug("scan {} point {}: {} at {:g} ms; reading again at {:g} ms", r.scan.id, idx,
                     saturated ? "saturated" : "under-exposed", t, *next);
       t = *next;

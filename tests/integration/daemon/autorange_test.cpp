@@ -172,5 +172,23 @@ TEST(Autorange, ScpiPhotometerOnGonioDevsimIsRangedThroughItsIntegrationTime) {
   EXPECT_EQ(n.begin()->second, 5);
 }
 
+// The photometer's own shortest setting (50 ms) is above the configured one: a reading that
+// still saturates there is a fault that says so, not an out-of-range error.
+TEST(Autorange, APhotometerThatRefusesAShorterSettingEndsTheRangingWithASaturationFault) {
+  TempDir dir;
+  ScpiDevsim sim(dir.path, json{{"full_scale_counts", 20000}, {"min_integration_ms", 50}});
+  std::ostringstream cfg;
+  cfg << "[server]\nlog_level = \"debug\"\n\n[instrument.motion]\ndriver = \"mock\"\n"
+      << "\n[instrument.photometer]\ndriver = \"scpi-tcp\"\nhost = \"127.0.0.1\"\nport = " << sim.port
+      << "\n\n[twin]\nthreads = 1\nrel_se = 0.01\nreplicates = 8\n";
+  Goniod g(dir.path / "state", cfg.str());
+  auto c = g.unix_conn();
+  const auto id = submit(c, "plate", "", json{{"grids", {"in=45;out=0"}}});
+  const auto sc = wait_state(c, id, {"completed", "paused", "failed"}, 60s);
+  ASSERT_EQ(sc["state"], "paused") << g.log_text();
+  EXPECT_NE(sc["reason"].get<std::string>().find("refuses a shorter integration time"), std::string::npos)
+      << sc["reason"];
+}
+
 }  // namespace
 }  // namespace gonio::test
