@@ -5,7 +5,9 @@
 // WAL index (-shm) is deleted. Over 100 such cuts on one store: it passes
 // PRAGMA integrity_check after each, every point acknowledged to a client (a scan.point
 // notification, sent after the commit) before the cut is stored after it, the interrupted
-// scan resumes, and at the end every scan is complete with each point once. With
+// scan resumes, the archive outbox (written in each point's transaction; the archive never
+// answers here) still owes every such point, and at the end every scan is complete with each
+// point once. With
 // store.synchronous = normal the same harness measures what a cut may take (the loss window).
 #include <sqlite3.h>
 #include <sys/types.h>
@@ -84,6 +86,20 @@ std::string integrity(const fs::path& db) {
 }
 
 // The stored point indices of a scan (none when the scan itself is gone).
+// The (scan, point) pairs the archive outbox owes the archive.
+std::set<std::pair<std::int64_t, std::int64_t>> outbox_points(const fs::path& db) {
+  std::set<std::pair<std::int64_t, std::int64_t>> out;
+  sqlite3* h = nullptr;
+  if (sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
+    sqlite3_stmt* st = nullptr;
+    if (sqlite3_prepare_v2(h, "SELECT ref, idx FROM outbox WHERE kind = 'point'", -1, &st, nullptr) == SQLITE_OK)
+      while (sqlite3_step(st) == SQLITE_ROW) out.emplace(sqlite3_column_int64(st, 0), sqlite3_column_int64(st, 1));
+    sqlite3_finalize(st);
+  }
+  sqlite3_close(h);
+  return out;
+}
+
 std::set<std::int64_t> stored(Conn& c, std::int64_t scan) {
   std::set<std::int64_t> idx;
   for (int offset = 0;; offset += 200) {
@@ -110,7 +126,9 @@ CutStats run_cuts(const fs::path& dir, int cuts, const std::string& synchronous,
   fs::create_directories(state);
   MockOptions o;
   o.tcp = o.http = false;
-  o.extra = "[store]\nsynchronous = \"" + synchronous + "\"\nmin_free_mb = 0\n";
+  // An archive that never answers: every point also writes an outbox row, in its transaction.
+  o.extra = "[store]\nsynchronous = \"" + synchronous + "\"\nmin_free_mb = 0\n\n[archive]\n"
+            "postgres = \"postgresql://gonio@127.0.0.1:1/none\"\nretry_max_s = 5\n";
   const auto config = mock_config(o);
   const std::vector<std::string> env{"LD_PRELOAD=" + kShim.string(), "POWERCUT_DIR=" + state.string()};
   std::map<std::int64_t, std::set<std::int64_t>> acked;  // scan -> acknowledged points
@@ -165,6 +183,12 @@ CutStats run_cuts(const fs::path& dir, int cuts, const std::string& synchronous,
     const auto check = integrity(state / "goniod.db");
     if (check != "ok") ++s.corrupt;
     EXPECT_EQ(check, "ok") << "after cut " << cut;
+    if (synchronous == "full") {
+      // Nothing acknowledged has left the archive's outbox either.
+      const auto owed = outbox_points(state / "goniod.db");
+      for (const auto& [scan, points] : acked)
+        for (const auto i : points) EXPECT_TRUE(owed.contains({scan, i})) << "outbox: scan " << scan << " point " << i;
+    }
   }
   // The last cut's scan resumes and every scan completes with each point once.
   Goniod g(state, config, env);
