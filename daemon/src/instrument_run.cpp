@@ -220,6 +220,19 @@ void Instrument::check_storage() {
   const auto now = std::chrono::steady_clock::now();
   if (now - storage_checked_ < std::chrono::seconds(1)) return;
   storage_checked_ = now;
+  // The low-space warning first: on a store that cannot write it is held in memory.
+  const auto s = store_.storage();
+  if (s.low && !low_space_) {
+    low_space_ = true;
+    const auto msg = fmt::format("low space: {}; no new scan starts until {:.0f} MiB are free (store.min_free_mb)",
+                                 describe_space(s.dir, s.space), static_cast<double>(s.min_free_bytes) / (1 << 20));
+    spdlog::warn("store: {}", msg);
+    alerts_.raise(AlertDraft{std::string(alert_kind::storage), Severity::warning, "storage:low", std::nullopt,
+                             std::nullopt, std::nullopt, msg});
+  } else if (!s.low && low_space_) {
+    low_space_ = false;
+    spdlog::info("store: space is back ({})", describe_space(s.dir, s.space));
+  }
   if (!store_.writable() && !store_.probe()) return;
   alerts_.flush_held();
   {
@@ -243,18 +256,6 @@ void Instrument::check_storage() {
         spdlog::warn("store: scans left running not recovered yet: {}", e.what());
       }
     }
-  }
-  const auto s = store_.storage();
-  if (s.low && !low_space_) {
-    low_space_ = true;
-    const auto msg = fmt::format("low space: {}; no new scan starts until {:.0f} MiB are free (store.min_free_mb)",
-                                 describe_space(s.dir, s.space), static_cast<double>(s.min_free_bytes) / (1 << 20));
-    spdlog::warn("store: {}", msg);
-    alerts_.raise(AlertDraft{std::string(alert_kind::storage), Severity::warning, "storage:low", std::nullopt,
-                             std::nullopt, std::nullopt, msg});
-  } else if (!s.low && low_space_) {
-    low_space_ = false;
-    spdlog::info("store: space is back ({})", describe_space(s.dir, s.space));
   }
 }
 

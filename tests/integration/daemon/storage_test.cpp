@@ -109,9 +109,11 @@ TEST(Storage, DiskFullMidScanPausesServesReadsAndResumesWithNothingLostOrTwice) 
   EXPECT_EQ(g.stop(), 0);
 }
 
+// Also the path where not even the alert can be written: the low-space warning raised on
+// the full disk is published from memory (id 0) and stored once the space is back.
 TEST(Storage, StartsReadOnlyOnAFullDiskAndWritesOnceSpaceIsBack) {
   TempDir dir;
-  SmallFs small(dir.path / "fs", "4m");
+  SmallFs small(dir.path / "fs", "8m");
   if (!small.mounted) GTEST_SKIP() << "cannot mount a tmpfs here (needs root)";
   std::int64_t id = 0;
   {
@@ -122,8 +124,16 @@ TEST(Storage, StartsReadOnlyOnAFullDiskAndWritesOnceSpaceIsBack) {
     g.stop(SIGKILL);  // leaves the WAL and its index behind, as a crash would
   }
   small.fill(small.path / "filler");
-  Goniod g(small.path / "state", storage_config("min_free_mb = 0\n"));  // throws if it exits
+  Goniod g(small.path / "state", storage_config("min_free_mb = 1\n"));  // throws if it exits
   auto c = g.unix_conn();
+  json held;
+  ASSERT_TRUE(eventually([&] {
+    held = c.call("instrument.status")["storage"]["unsaved_alerts"];
+    return !held.empty();
+  })) << g.log_text();
+  EXPECT_EQ(held[0]["kind"], "storage");
+  EXPECT_EQ(held[0]["id"], 0);
+  EXPECT_EQ(held[0]["severity"], "warning");
   EXPECT_EQ(c.call("scan.get", json{{"scan", id}})["state"], "completed");
   EXPECT_EQ(all_points(c, id).size(), 7u);
   const auto refused = c.request("scan.submit", json{{"sample", "tile"}, {"grids", {"in=45;out=0"}}});
@@ -134,6 +144,11 @@ TEST(Storage, StartsReadOnlyOnAFullDiskAndWritesOnceSpaceIsBack) {
   fs::remove(small.path / "filler");
   ASSERT_TRUE(eventually([&] { return c.call("instrument.status")["storage"]["writable"].get<bool>(); }))
       << g.log_text();
+  ASSERT_TRUE(eventually([&] { return c.call("instrument.status")["storage"]["unsaved_alerts"].empty(); }));
+  bool stored = false;
+  for (const auto& a : c.call("alert.list", json{{"limit", 100}}))
+    stored = stored || (a["kind"] == "storage" && a["id"].get<std::int64_t>() > 0);
+  EXPECT_TRUE(stored);
   const auto id2 = submit(c, "tile", kTrueSample, json{{"grids", {"in=45;out=0:20:10"}}});
   EXPECT_EQ(wait_state(c, id2, {"completed", "paused", "failed"})["state"], "completed") << g.log_text();
 }
