@@ -84,7 +84,7 @@ Param json_opt_number(const json& v) {
   return num(v.get<double>());
 }
 
-// The 22 columns of a points row, read straight from the point's stored JSON (what
+// The 23 columns of a points row, read straight from the point's stored JSON (what
 // PointRecord's to_json wrote; the store validated it then): no PointRecord and no second
 // validation, which made up most of a batch's client time.
 void append_point(std::vector<Param>& p, const std::string& instrument, const json& pt) {
@@ -108,7 +108,8 @@ void append_point(std::vector<Param>& p, const std::string& instrument, const js
             predicted.is_null() ? std::nullopt : json_float_array(predicted.at("values")),
             predicted.is_null() ? std::nullopt : json_float_array(predicted.at("std_uncertainty")),
             pt.at("twin_version").get<std::string>(), json_opt_number(pt.at("z_max")),
-            json_opt_number(pt.at("delta_e00")), flag(pt.at("diverged").get<bool>()), std::move(flags)});
+            json_opt_number(pt.at("delta_e00")), flag(pt.at("diverged").get<bool>()), std::move(flags),
+            pt.contains("integration_ms") ? json_opt_number(pt.at("integration_ms")) : Param()});
 }
 
 }  // namespace
@@ -225,8 +226,9 @@ std::vector<SqlStatement> build_archive_batch(const std::string& instrument,
   if (!p.empty())
     emit(out, "INSERT INTO points (instrument, scan_id, idx, geometry_index, repeat, theta_i, "
               "phi_i, theta_r, phi_r, actual, started_at, finished_at, wavelengths, measured, "
-              "measured_u, predicted, predicted_u, twin_version, z_max, delta_e00, diverged, flags)",
-         22, "ON CONFLICT (instrument, scan_id, idx) DO NOTHING", std::move(p));
+              "measured_u, predicted, predicted_u, twin_version, z_max, delta_e00, diverged, flags, "
+              "integration_ms)",
+         23, "ON CONFLICT (instrument, scan_id, idx) DO NOTHING", std::move(p));
 
   p.clear();
   for (auto id : alert_ids) {

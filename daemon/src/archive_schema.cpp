@@ -131,6 +131,17 @@ CREATE VIEW scan_summary AS
 CREATE VIEW open_alerts AS
   SELECT * FROM alerts WHERE NOT acknowledged;
 )sql",
+      // 1 -> 2: the integration time of each point (auto-ranging); null before it was kept.
+      R"sql(
+ALTER TABLE points ADD COLUMN integration_ms double precision;
+CREATE OR REPLACE VIEW sample_points AS
+  SELECT sm.name AS sample, p.instrument, p.scan_id, p.idx, p.theta_i, p.phi_i, p.theta_r,
+         p.phi_r, p.wavelengths, p.measured, p.measured_u, p.predicted, p.predicted_u,
+         p.z_max, p.delta_e00, p.diverged, p.finished_at, p.integration_ms
+    FROM points p
+    JOIN scans s ON s.instrument = p.instrument AND s.scan_id = p.scan_id
+    JOIN samples sm ON sm.instrument = s.instrument AND sm.sample_id = s.sample_id;
+)sql",
   };
   return m;
 }

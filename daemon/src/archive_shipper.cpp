@@ -250,10 +250,19 @@ void ArchiveShipper::check_backlog_age() {
   std::chrono::seconds age{0};
   if (oldest) {
     try {
-      age = std::chrono::duration_cast<std::chrono::seconds>(utc::Clock::now() - utc::parse(*oldest));
+      const auto steady_now = std::chrono::steady_clock::now();
+      if (aged_row_ != oldest) {
+        aged_row_ = oldest;
+        aged_base_ = std::max(std::chrono::seconds(0), std::chrono::duration_cast<std::chrono::seconds>(
+                                                           utc::Clock::now() - utc::parse(*oldest)));
+        aged_since_ = steady_now;
+      }
+      age = aged_base_ + std::chrono::duration_cast<std::chrono::seconds>(steady_now - aged_since_);
       stale = age > config_.max_backlog_age;
     } catch (const Error&) {
     }
+  } else {
+    aged_row_.reset();
   }
   if (stale && !alerted && alerts_) {
     std::string why;

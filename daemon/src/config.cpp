@@ -342,7 +342,7 @@ json Config::to_json() const {
       list.push_back({{"name", t.name}, {"role", to_text(t.role)}, {"sha256", t.sha256}});
     doc["auth"] = {{"token", list}};
   }
-  doc["store"] = {{"synchronous", synchronous_full ? "full" : "normal"}};
+  doc["store"] = {{"synchronous", synchronous_full ? "full" : "normal"}, {"min_free_mb", min_free_mb}};
   json lim = {{"incidence", {limits.incidence_min, limits.incidence_max}},
               {"receive", {limits.receive_min, limits.receive_max}},
               {"rotation", {limits.rotation_min, limits.rotation_max}},
@@ -353,10 +353,15 @@ json Config::to_json() const {
                        {"home_timeout_s", in_seconds(home_timeout)},
                        {"measure_timeout_s", in_seconds(measure_timeout)},
                        {"settle_s", in_seconds(settle)},
+                       {"autorange", autorange},
+                       {"integration_min_ms", integration_min_ms},
+                       {"integration_max_ms", integration_max_ms},
+                       {"underexposed_snr", underexposed_snr},
                        {"auto_resume", auto_resume},
                        {"auto_resume_delay_s", in_seconds(auto_resume_delay)},
                        {"max_auto_resumes", max_auto_resumes},
                        {"limits", lim}};
+  if (integration_ms) doc["instrument"]["integration_ms"] = *integration_ms;
   if (!motion.empty()) doc["instrument"]["motion"] = motion;
   if (!photometer.empty()) doc["instrument"]["photometer"] = photometer;
   doc["twin"] = {{"threads", twin_threads},
@@ -518,6 +523,7 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
     if (sync != "full" && sync != "normal")
       throw Error::invalid("store.synchronous", fmt::format("'{}' is not full or normal", sync));
     c.synchronous_full = sync == "full";
+    c.min_free_mb = r.optional_in<double>("min_free_mb", c.min_free_mb, 0, 1e7, " MiB");
     r.finish();
   }
 
@@ -538,6 +544,17 @@ Config Config::parse(std::string_view text, std::string_view source, const std::
     c.home_timeout = seconds_in(r, "home_timeout_s", c.home_timeout, 0.1, 3600);
     c.measure_timeout = seconds_in(r, "measure_timeout_s", c.measure_timeout, 0.1, 3600);
     c.settle = seconds_in(r, "settle_s", c.settle, 0, 60);
+    c.autorange = r.optional<bool>("autorange", c.autorange);
+    if (r.has("integration_ms"))
+      c.integration_ms = r.optional_in<double>("integration_ms", 100, 0.001, 3600000, " ms");
+    c.integration_min_ms = r.optional_in<double>("integration_min_ms", c.integration_min_ms, 0.001, 3600000, " ms");
+    c.integration_max_ms = r.optional_in<double>("integration_max_ms", c.integration_max_ms, 0.001, 3600000, " ms");
+    if (c.integration_max_ms < c.integration_min_ms)
+      throw Error::invalid("instrument.integration_max_ms", "must be at least integration_min_ms");
+    if (c.integration_ms && (*c.integration_ms < c.integration_min_ms || *c.integration_ms > c.integration_max_ms))
+      throw Error::out_of_range("instrument.integration_ms", *c.integration_ms, c.integration_min_ms,
+                                c.integration_max_ms, " ms");
+    c.underexposed_snr = r.optional_in<double>("underexposed_snr", c.underexposed_snr, 0, 1e6);
     c.auto_resume = r.optional<bool>("auto_resume", c.auto_resume);
     c.auto_resume_delay = seconds_in(r, "auto_resume_delay_s", c.auto_resume_delay, 0, 86400);
     c.max_auto_resumes = static_cast<int>(r.optional_in<long long>("max_auto_resumes", c.max_auto_resumes, 0, 1000));

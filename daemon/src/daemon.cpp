@@ -230,16 +230,25 @@ int run_daemon(const DaemonOptions& o) {
   // ---- state dir and store
   const fs::path state = o.state_dir;
   std::unique_ptr<Store> store;
+  constexpr const char* kRecoverReason =
+      "goniod was stopped uncleanly during the scan; resumes at the next unmeasured point";
+  bool recover_later = false;
   try {
     std::error_code ec;
     fs::create_directories(state, ec);
     if (ec) throw Error(Errc::io_error, fmt::format("cannot create {}: {}", state.string(), ec.message()));
     store = std::make_unique<Store>(state / "goniod.db", config.synchronous_full);
+    store->set_min_free_mb(config.min_free_mb);
     // Before anything is written, so that the archive sees every change of this run.
     store->set_outbox(!config.archive.postgres.empty());
-    for (auto id : store->recover_running("goniod was stopped uncleanly during the scan; resumes "
-                                          "at the next unmeasured point"))
-      spdlog::warn("scan {} was running when goniod last stopped; it resumes first", id);
+    try {
+      for (auto id : store->recover_running(kRecoverReason))
+        spdlog::warn("scan {} was running when goniod last stopped; it resumes first", id);
+    } catch (const Error& e) {
+      if (e.code() != Errc::storage_unavailable) throw;
+      recover_later = true;  // a full disk: start read-only, recover once it can write
+      spdlog::error("starting with a read-only store: {}", e.what());
+    }
   } catch (const Error& e) {
     spdlog::critical("{}", e.what());
     return exit_code::state;
@@ -247,8 +256,13 @@ int run_daemon(const DaemonOptions& o) {
 
   try {
     Auth auth(config.tokens, *store);
-    if (auth.ensure_admin_token(state / "admin.token"))
-      spdlog::info("wrote a new admin token to {} (mode 0600)", (state / "admin.token").string());
+    try {
+      if (auth.ensure_admin_token(state / "admin.token"))
+        spdlog::info("wrote a new admin token to {} (mode 0600)", (state / "admin.token").string());
+    } catch (const Error& e) {
+      if (e.code() != Errc::storage_unavailable) throw;
+      spdlog::error("no new admin token: {}", e.what());
+    }
 
     TwinService twin(config, twin::InstrumentProfile::load(config.profile));
     use_calibrated_profile(*store, twin);
@@ -370,6 +384,7 @@ int run_daemon(const DaemonOptions& o) {
       instrument.set_sustained_listener(
           [&diagnoser](std::int64_t scan, std::int64_t alert) { diagnoser->request(scan, alert); });
     }
+    if (recover_later) instrument.recover_when_writable(kRecoverReason);
     instrument.set_status_listener([](const std::string& s) {
       sd_notifyf(0, "STATUS=%s", s.c_str());
     });
@@ -380,7 +395,16 @@ int run_daemon(const DaemonOptions& o) {
       for (auto& l : listeners) l->close();
       return exit_code::usage;
     }
-    store->audit("goniod", "daemon.start", "", json{{"version", GONIO_VERSION_STRING}, {"listen", endpoints}});
+    // Audit rows of the daemon itself are not worth refusing to run for on a full disk.
+    const auto audit_self = [&](const std::string& action, const json& detail) {
+      try {
+        store->audit("goniod", action, "", detail);
+      } catch (const Error& e) {
+        if (e.code() != Errc::storage_unavailable) throw;
+        spdlog::warn("{} not audited: {}", action, e.what());
+      }
+    };
+    audit_self("daemon.start", json{{"version", GONIO_VERSION_STRING}, {"listen", endpoints}});
 
     // ---- signals, systemd
     std::thread stopper;
@@ -441,7 +465,7 @@ int run_daemon(const DaemonOptions& o) {
     hub.set_tap(nullptr);
     if (mqtt) mqtt->stop();
     if (archive) archive->stop();
-    store->audit("goniod", "daemon.stop", "", json::object());
+    audit_self("daemon.stop", json::object());
     spdlog::info("goniod stopped cleanly");
     return exit_code::ok;
   } catch (const Error& e) {

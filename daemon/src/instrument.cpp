@@ -186,6 +186,7 @@ void Instrument::open_side(Side s, bool at_start) {
         spdlog::error("instrument: {}", fault_reason_);
       }
       old = std::exchange(photometer_, std::move(p));
+      integration_set_.reset();  // a device opened again may have any setting
       photometer_grid_ = grid;
       photometer_identity_ = identity;
     }
@@ -339,6 +340,7 @@ json Instrument::status() const {
                   {"receive", {config_.limits.receive_min, config_.limits.receive_max}},
                   {"min_separation", guard_.min_separation_deg()}}},
       {"profile", twin_.profile_info()},
+      {"storage", storage_json()},
   };
 }
 
@@ -421,6 +423,7 @@ void Instrument::loop() {
         continue;
       }
       lock.unlock();
+      check_storage();
       try {
         step();
       } catch (const std::exception& e) {
@@ -453,7 +456,12 @@ void Instrument::loop() {
     }
     auto wait_until = Clock::now() + std::chrono::seconds(1);
     if (auto_resume_) wait_until = std::min(wait_until, auto_resume_->second);
-    if (!fault_latched_ && unhomed_.empty()) {
+    lock.unlock();
+    check_storage();
+    lock.lock();
+    if (stopping_ || !commands_.empty()) continue;
+    // No scan starts on a store that cannot write or is low on space.
+    if (!fault_latched_ && unhomed_.empty() && store_.writable() && !low_space_) {
       lock.unlock();
       std::optional<Scan> next;
       {

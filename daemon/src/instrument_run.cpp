@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "gonio/daemon/autorange.hpp"
 #include "gonio/daemon/instrument.hpp"
 #include "gonio/daemon/point_reduction.hpp"
 #include "gonio/proto/error.hpp"
@@ -132,6 +133,13 @@ void Instrument::finish_run(ScanState state, const std::string& reason, const st
                  sc->reason.empty() ? "" : ": " + sc->reason);
   } catch (const Error& e) {
     spdlog::error("scan {}: cannot record state {}: {}", r->scan.id, to_text(state), e.what());
+    if (e.code() == Errc::storage_unavailable) {
+      // Published now, stored once the store can write (check_storage).
+      unsaved_state_ = UnsavedState{r->scan.id, state, reason, actor};
+      hub_.publish(Topic::state, "scan.state",
+                   json{{"scan", r->scan.id}, {"state", to_text(state)}, {"reason", reason}, {"stored", false}},
+                   r->scan.id);
+    }
   }
   if (sc)
     hub_.publish(Topic::progress, "scan.progress",
@@ -171,6 +179,99 @@ void Instrument::on_device_fault(const Error& e) {
     ++auto_resumes_[id];
     auto_resume_ = std::make_pair(id, Clock::now() + config_.auto_resume_delay);
   }
+}
+
+double Instrument::nominal_integration_ms() {
+  if (!config_.autorange || !photometer_->capabilities().settable_integration) return 0;
+  if (!nominal_integration_) {
+    // The configured setting, else the photometer's own as goniod first finds it (kept, so
+    // that a setting left short by ranging is not taken for the nominal one).
+    nominal_integration_ = config_.integration_ms ? *config_.integration_ms
+                                                  : photometer_->integration_ms(config_.measure_timeout);
+  }
+  return std::clamp(*nominal_integration_, config_.integration_min_ms, config_.integration_max_ms);
+}
+
+void Instrument::set_integration(double ms) {
+  if (integration_set_ && std::abs(*integration_set_ - ms) <= 1e-9 * ms) return;
+  integration_set_.reset();  // unknown until the device took it
+  photometer_->set_integration_ms(ms, config_.measure_timeout);
+  integration_set_ = ms;
+}
+
+void Instrument::on_storage_fault(const Error& e) {
+  std::int64_t id = 0;
+  {
+    std::lock_guard lock(mu_);
+    id = run_ ? run_->scan.id : 0;
+  }
+  const auto reason = fmt::format("storage: {}; free space, then resume the scan", e.what());
+  spdlog::error("scan {}: {}", id, reason);
+  // The pause and its alert may use the store's reserve; without one (a read-only file
+  // system) the alert is held in memory and published, the state stored later.
+  Store::Essential essential;
+  alerts_.raise(AlertDraft{std::string(alert_kind::storage), Severity::critical, "storage:unwritable", id,
+                           std::nullopt, std::nullopt, fmt::format("scan {} paused: {}", id, reason)});
+  std::lock_guard sched(sched_mu_);
+  finish_run(ScanState::paused, reason, "goniod");
+}
+
+void Instrument::check_storage() {
+  const auto now = std::chrono::steady_clock::now();
+  if (now - storage_checked_ < std::chrono::seconds(1)) return;
+  storage_checked_ = now;
+  // The low-space warning first: on a store that cannot write it is held in memory.
+  const auto s = store_.storage();
+  if (s.low && !low_space_) {
+    low_space_ = true;
+    const auto msg = fmt::format("low space: {}; no new scan starts until {:.0f} MiB are free (store.min_free_mb)",
+                                 describe_space(s.dir, s.space), static_cast<double>(s.min_free_bytes) / (1 << 20));
+    spdlog::warn("store: {}", msg);
+    alerts_.raise(AlertDraft{std::string(alert_kind::storage), Severity::warning, "storage:low", std::nullopt,
+                             std::nullopt, std::nullopt, msg});
+  } else if (!s.low && low_space_) {
+    low_space_ = false;
+    spdlog::info("store: space is back ({})", describe_space(s.dir, s.space));
+  }
+  if (!store_.writable() && !store_.probe()) return;
+  alerts_.flush_held();
+  {
+    std::lock_guard sched(sched_mu_);
+    if (unsaved_state_) {
+      try {
+        const auto u = *unsaved_state_;
+        transition(u.scan, u.state, u.reason, u.actor);
+        unsaved_state_.reset();
+        spdlog::info("scan {}: state {} stored now that the store can write", u.scan, to_text(u.state));
+      } catch (const Error& e) {
+        spdlog::warn("scan {}: state still not stored: {}", unsaved_state_->scan, e.what());
+      }
+    }
+    if (recover_reason_) {
+      try {
+        for (const auto id : store_.recover_running(*recover_reason_))
+          spdlog::warn("scan {} was running when goniod last stopped; it resumes first", id);
+        recover_reason_.reset();
+      } catch (const Error& e) {
+        spdlog::warn("store: scans left running not recovered yet: {}", e.what());
+      }
+    }
+  }
+}
+
+json Instrument::storage_json() const {
+  const auto s = store_.storage();
+  json held = json::array();
+  for (const auto& a : alerts_.held()) held.push_back(a);
+  return json{{"dir", s.dir.string()},
+              {"free_mb", s.space.known ? json(static_cast<double>(s.space.free_bytes) / (1 << 20)) : json(nullptr)},
+              {"read_only_fs", s.space.read_only},
+              {"writable", s.writable},
+              {"low", s.low},
+              {"fault", s.fault},
+              {"min_free_mb", static_cast<double>(s.min_free_bytes) / (1 << 20)},
+              {"reserve", s.reserve},
+              {"unsaved_alerts", std::move(held)}};
 }
 
 void Instrument::move_arms(double incidence, double receive, std::optional<double> rotation) {
@@ -261,15 +362,72 @@ void Instrument::step() {
       }
     });
     side = Side::photometer;
-    timed([&] { dark = photometer_->measure(Channel::dark, config_.measure_timeout); });
-    read_reference = !r.reference || plan.reads_reference(r.since_start);
-    if (read_reference) {
-      drivers::Reading ref;
-      timed([&] { ref = photometer_->measure(Channel::reference, config_.measure_timeout); });
-      r.reference = std::move(ref);
-      r.reference_dark = dark;
+    // Auto-ranging (autorange.hpp): from the nominal setting, shorter while saturated,
+    // longer while under-exposed; dark, reference and sample always at one setting.
+    const RangeLimits lim{config_.integration_min_ms, config_.integration_max_ms, config_.underexposed_snr};
+    if (!r.nominal_ms) timed([&] { r.nominal_ms = nominal_integration_ms(); });
+    const bool ranging = *r.nominal_ms > 0;
+    const bool due = !r.reference || plan.reads_reference(r.since_start);
+    double t = *r.nominal_ms;
+    std::optional<double> ceiling;
+    std::optional<double> kept;  // the setting of the readings in hand, while ranging further
+    for (;;) {
+      if (ranging) {
+        try {
+          timed([&] { set_integration(t); });
+        } catch (const Error& e) {
+          // The photometer's own limits are narrower than the configured ones.
+          if (e.code() != Errc::out_of_range) throw;
+          if (ceiling && t < *ceiling)
+            throw Error(Errc::saturated,
+                        fmt::format("detector saturated at {:g} ms and the photometer refuses a shorter "
+                                    "integration time ({}); attenuate the beam",
+                                    *ceiling, e.what()));
+          if (!kept) throw;
+          t = *kept;  // a longer setting refused: keep the readings at the last one
+          integration_set_.reset();
+          break;
+        }
+      }
+      timed([&] { dark = photometer_->measure(Channel::dark, config_.measure_timeout); });
+      const bool ref_stale = ranging && r.reference && r.reference->integration_ms > 0 &&
+                             std::abs(r.reference->integration_ms - t) > 1e-9 * t;
+      if (due || ref_stale) {
+        drivers::Reading ref;
+        timed([&] {
+          ref = photometer_->measure(Channel::reference, config_.measure_timeout,
+                                     ranging ? drivers::SaturationPolicy::flag : drivers::SaturationPolicy::throw_error);
+        });
+        r.reference = std::move(ref);
+        r.reference_dark = dark;
+        read_reference = true;
+      }
+      timed([&] {
+        sample = photometer_->measure(Channel::sample, config_.measure_timeout,
+                                      ranging ? drivers::SaturationPolicy::flag : drivers::SaturationPolicy::throw_error);
+      });
+      if (!ranging) break;
+      const bool saturated = sample.saturated || r.reference->saturated;
+      const auto next = next_integration_ms(t, saturated, saturated ? 0 : best_channel_snr(sample, dark), ceiling, lim);
+      if (!next) {
+        if (saturated) {
+          // The shortest setting still saturates: only now a fault, naming the channel.
+          throw Error(Errc::saturated,
+                      fmt::format("detector saturated on the {} channel at {:g} ms, the shortest "
+                                  "integration time allowed (instrument.integration_min_ms); "
+                                  "attenuate the beam",
+                                  r.reference->saturated ? "reference" : "sample", t));
+        }
+        break;
+      }
+      if (saturated) ceiling = t;
+      else kept = t;
+      spdlog::debug("scan {} point {}: {} at {:g} ms; reading again at {:g} ms", r.scan.id, idx,
+                    saturated ? "saturated" : "under-exposed", t, *next);
+      t = *next;
     }
-    timed([&] { sample = photometer_->measure(Channel::sample, config_.measure_timeout); });
+    if (sample.integration_ms > 0) p.integration_ms = sample.integration_ms;
+    else if (ranging) p.integration_ms = t;
     side = Side::motion;
     timed([&] { p.actual.theta_i = motion_->position(Axis::incidence, config_.move_timeout); });
     timed([&] { p.actual.theta_r = motion_->position(Axis::receive, config_.move_timeout); });
@@ -311,7 +469,11 @@ void Instrument::step() {
 
   // Reference white drift against the run's first reading (instrument health).
   if (read_reference) {
-    if (const auto drift = r.drift.observe(reduced->net_reference)) {
+    // Counts grow with the integration time: the drift compares counts per nominal setting.
+    auto net = reduced->net_reference;
+    if (r.nominal_ms.value_or(0) > 0 && r.reference->integration_ms > 0)
+      for (auto& v : net) v *= *r.nominal_ms / r.reference->integration_ms;
+    if (const auto drift = r.drift.observe(net)) {
       p.flags.push_back("reference_drift");
       alerts_.raise(AlertDraft{std::string(alert_kind::reference_drift), Severity::warning,
                                fmt::format("reference_drift:scan:{}", r.scan.id), r.scan.id,
@@ -360,6 +522,10 @@ void Instrument::step() {
   try {
     store_.insert_point(p, point_text);
   } catch (const Error& e) {
+    if (e.code() == Errc::storage_unavailable) {
+      on_storage_fault(e);  // not stored, not published: measured again after the resume
+      return;
+    }
     if (e.code() == Errc::invalid_state) {
       spdlog::warn("scan {}: {}; skipping it", r.scan.id, e.what());  // never store twice
     } else {

@@ -32,7 +32,11 @@ struct Instrument::Run {
   double reference_beta = 1.0;  // that profile's β of the reference white
   std::size_t next = 0;         // next point index to measure
   std::size_t since_start = 0;  // points measured in this run
+  // The reference white and its dark, last read; at reference->integration_ms.
   std::optional<drivers::Reading> reference, reference_dark;
+  // Where every point's auto-ranging starts, found at the run's first reading; 0: the
+  // photometer does not range (autorange off, or its integration time is not settable).
+  std::optional<double> nominal_ms;
   ReferenceDriftMonitor drift{DivergenceSettings{}.reference_drift};
   ScanEvidence evidence{0, 2};     // every point of the scan, stored ones included
   std::string spec;               // the sample's catalogued BSDF

@@ -89,6 +89,7 @@ int code_for(Errc e) noexcept {
     case Errc::unauthorized: return code::unauthorized;
     case Errc::forbidden: return code::forbidden;
     case Errc::plan_rejected: return code::plan_rejected;
+    case Errc::storage_unavailable: return code::storage_unavailable;
     case Errc::internal: return code::internal_error;
   }
   return code::internal_error;

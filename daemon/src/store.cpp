@@ -20,6 +20,7 @@ using nlohmann::json;
 struct Store::Connection {
   sqlite3* db = nullptr;
   std::map<std::string, sqlite3_stmt*, std::less<>> cache;
+  Store* owner = nullptr;  // the writer's store: its storage failures make the store read-only
 
   Connection(const std::filesystem::path& file, int flags) {
     if (sqlite3_open_v2(file.c_str(), &db, flags | SQLITE_OPEN_NOMUTEX, nullptr) != SQLITE_OK) {
@@ -38,15 +39,27 @@ struct Store::Connection {
   Connection& operator=(const Connection&) = delete;
 
   [[noreturn]] void fail(std::string_view what) const {
+    const int rc = sqlite3_extended_errcode(db);
+    if (owner && is_storage_failure(rc)) throw owner->storage_failure(rc, what, sqlite3_errmsg(db));
     throw Error(Errc::io_error, fmt::format("store: {}: {}", what, sqlite3_errmsg(db)));
   }
   void exec(const char* sql) {
     char* err = nullptr;
-    if (sqlite3_exec(db, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+    const int rc = sqlite3_exec(db, sql, nullptr, nullptr, &err);
+    if (rc != SQLITE_OK) {
       const std::string msg = err ? err : "unknown error";
       sqlite3_free(err);
+      if (owner && is_storage_failure(sqlite3_extended_errcode(db)))
+        throw owner->storage_failure(sqlite3_extended_errcode(db), sql, msg);
       throw Error(Errc::io_error, fmt::format("store: {}", msg));
     }
+  }
+  // Around every write of the writer connection (storage.hpp).
+  void begin_write() {
+    if (owner) owner->before_write();
+  }
+  void committed() {
+    if (owner) owner->after_commit();
   }
   sqlite3_stmt* prepare(std::string_view sql) {
     if (const auto it = cache.find(sql); it != cache.end()) return it->second;
@@ -132,7 +145,10 @@ class Stmt {
 // BEGIN IMMEDIATE … COMMIT, rolled back when left by an exception.
 class Transaction {
  public:
-  explicit Transaction(Connection& c) : c_(c) { c_.exec("BEGIN IMMEDIATE"); }
+  explicit Transaction(Connection& c) : c_(c) {
+    c_.begin_write();
+    c_.exec("BEGIN IMMEDIATE");
+  }
   ~Transaction() {
     if (!done_) sqlite3_exec(c_.db, "ROLLBACK", nullptr, nullptr, nullptr);
   }
@@ -141,6 +157,7 @@ class Transaction {
   void commit() {
     c_.exec("COMMIT");
     done_ = true;
+    c_.committed();
   }
 
  private:
@@ -372,6 +389,14 @@ Store::ReadLease Store::read() const {
       return ReadLease(*this, std::move(c));
     }
   }
+  // On a read-only file system a WAL database without its -shm index cannot be opened as
+  // usual; with no -wal either (goniod stopped cleanly) the file is complete and cannot
+  // change, which is what SQLite's immutable mode is for.
+  if (immutable_reads_) {
+    auto c = std::make_unique<Connection>(
+        std::filesystem::path("file:" + path_.string() + "?immutable=1"), SQLITE_OPEN_READONLY | SQLITE_OPEN_URI);
+    return ReadLease(*this, std::move(c));
+  }
   auto c = std::make_unique<Connection>(path_, SQLITE_OPEN_READONLY);
   return ReadLease(*this, std::move(c));
 }
@@ -379,10 +404,148 @@ Store::ReadLease Store::read() const {
 Store::Store(const std::filesystem::path& file, bool synchronous_full)
     : path_(file), synchronous_full_(synchronous_full) {
   writer_ = std::make_unique<Connection>(file, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
-  writer_->exec("PRAGMA journal_mode = WAL");
-  writer_->exec(synchronous_full_ ? "PRAGMA synchronous = FULL" : "PRAGMA synchronous = NORMAL");
-  writer_->exec("PRAGMA foreign_keys = ON");
-  migrate();
+  writer_->owner = this;
+  try {
+    writer_->exec("PRAGMA journal_mode = WAL");
+    writer_->exec(synchronous_full_ ? "PRAGMA synchronous = FULL" : "PRAGMA synchronous = NORMAL");
+    writer_->exec("PRAGMA foreign_keys = ON");
+    migrate();
+  } catch (const Error& e) {
+    // A full disk at start: goniod serves what is stored, read-only (storage.hpp).
+    if (e.code() != Errc::storage_unavailable) throw;
+    spdlog::error("store: opened read-only: {}", e.what());
+    std::error_code ec;
+    if (space_of(state_dir()).read_only && !std::filesystem::exists(path_.string() + "-wal", ec))
+      immutable_reads_ = true;
+  }
+  // A disk already full at start: read-only from the outset rather than at the first write
+  // that happens not to fit in the pages SQLite has already allocated.
+  const auto space = space_of(state_dir());
+  if (writable() && space.known && (space.read_only || space.free_bytes < kReserveBytes)) {
+    read_only_ = true;
+    std::lock_guard lock(space_mu_);
+    fault_ = fmt::format("the disk was full at start ({})", describe_space(state_dir(), space));
+    spdlog::error("store: opened read-only: {}", fault_);
+  }
+  if (writable() && !std::filesystem::exists(reserve_path()) && !make_reserve(reserve_path(), kReserveBytes))
+    spdlog::warn("store: cannot set {} MiB aside in {}: {}", kReserveBytes >> 20, reserve_path().string(),
+                 describe_space(state_dir(), space_of(state_dir())));
+}
+
+// ---- storage ---------------------------------------------------------------------------
+
+namespace {
+thread_local int essential_depth = 0;
+}  // namespace
+
+Store::Essential::Essential() noexcept { ++essential_depth; }
+Store::Essential::~Essential() { --essential_depth; }
+
+std::filesystem::path Store::reserve_path() const { return path_.string() + "-reserve"; }
+
+std::filesystem::path Store::state_dir() const {
+  std::error_code ec;
+  const auto abs = std::filesystem::absolute(path_, ec);
+  return (ec ? path_ : abs).parent_path();
+}
+
+void Store::set_min_free_mb(double mb) {
+  std::lock_guard lock(space_mu_);
+  min_free_bytes_ = static_cast<std::uint64_t>(mb * (1 << 20));
+}
+
+Store::StorageState Store::storage() const {
+  StorageState s;
+  s.dir = state_dir();
+  s.space = space_of(s.dir);
+  {
+    std::lock_guard lock(space_mu_);
+    s.fault = fault_;
+    s.min_free_bytes = min_free_bytes_;
+  }
+  s.writable = writable();
+  s.low = s.space.known && (s.space.read_only || s.space.free_bytes < s.min_free_bytes);
+  std::error_code ec;
+  s.reserve = std::filesystem::exists(reserve_path(), ec);
+  return s;
+}
+
+Error Store::storage_failure(int code, std::string_view what, std::string_view message) {
+  const auto dir = state_dir();
+  const auto space = space_of(dir);
+  if ((code & 0xff) == SQLITE_FULL) {
+    std::error_code ec;
+    if (std::filesystem::remove(reserve_path(), ec))
+      spdlog::warn("store: the disk is full; released the {} MiB reserve for the pause and its alert",
+                   kReserveBytes >> 20);
+  }
+  const bool was_writable = !read_only_.exchange(true);
+  {
+    std::lock_guard lock(space_mu_);
+    fault_ = fmt::format("{} ({})", message, describe_space(dir, space));
+  }
+  if (was_writable) spdlog::error("store: read-only from now on: {}: {}; {}", what, message, describe_space(dir, space));
+  return Error(Errc::storage_unavailable,
+               fmt::format("store: cannot write ({}): {}; reads go on, writes resume once space is back",
+                           message, describe_space(dir, space)));
+}
+
+void Store::before_write() {
+  if (!read_only_ || essential_depth > 0) return;
+  const auto dir = state_dir();
+  const auto space = space_of(dir);
+  std::uint64_t need = 0;
+  std::string fault;
+  {
+    std::lock_guard lock(space_mu_);
+    need = min_free_bytes_ + kReserveBytes;
+    fault = fault_;
+  }
+  // Enough room again: let the write try (and make the store writable if it goes through).
+  if (space.known && !space.read_only && space.free_bytes >= need) return;
+  throw Error(Errc::storage_unavailable,
+              fmt::format("the store is read-only since a write failed ({}); now {}; writes resume "
+                          "once {:.0f} MiB are free (store.min_free_mb and the reserve)",
+                          fault, describe_space(dir, space), static_cast<double>(need) / (1 << 20)));
+}
+
+void Store::after_commit() {
+  if (!read_only_ || essential_depth > 0) return;
+  if (!std::filesystem::exists(reserve_path()) && !make_reserve(reserve_path(), kReserveBytes))
+    spdlog::warn("store: cannot set the reserve aside again yet");
+  read_only_ = false;
+  {
+    std::lock_guard lock(space_mu_);
+    fault_.clear();
+  }
+  spdlog::info("store: writable again ({})", describe_space(state_dir(), space_of(state_dir())));
+}
+
+bool Store::probe() {
+  if (writable()) return true;
+  try {
+    std::lock_guard lock(write_mu_);
+    if (sqlite3_db_readonly(writer_->db, "main") == 1) {
+      // Opened on a read-only file system: SQLite fell back to reading. Open it again for
+      // writing once the file system allows it.
+      before_write();
+      auto w = std::make_unique<Connection>(path_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+      w->owner = this;
+      w->exec("PRAGMA journal_mode = WAL");
+      w->exec(synchronous_full_ ? "PRAGMA synchronous = FULL" : "PRAGMA synchronous = NORMAL");
+      w->exec("PRAGMA foreign_keys = ON");
+      writer_ = std::move(w);
+      immutable_reads_ = false;
+      std::lock_guard pool(pool_mu_);
+      readers_.clear();
+    }
+    Transaction t(*writer_);
+    audit_in(*writer_, "goniod", "store.writable", "", json::object());
+    t.commit();
+  } catch (const Error& e) {
+    if (e.code() != Errc::storage_unavailable) throw;
+  }
+  return writable();
 }
 
 Store::~Store() = default;
@@ -903,6 +1066,7 @@ std::vector<OutboxRow> Store::outbox_batch(std::size_t limit, std::int64_t after
 
 void Store::outbox_remove(std::int64_t first_seq, std::int64_t last_seq) {
   std::lock_guard lock(write_mu_);
+  writer_->begin_write();
   Stmt(*writer_, "DELETE FROM outbox WHERE seq BETWEEN ? AND ?").bind(1, first_seq).bind(2, last_seq).run();
 }
 
@@ -959,7 +1123,9 @@ std::size_t Store::outbox_reship(std::int64_t scan_id, const std::string& actor)
 void Store::audit(const std::string& actor, const std::string& action, const std::string& target,
                   const json& detail) {
   std::lock_guard lock(write_mu_);
+  writer_->begin_write();
   audit_in(*writer_, actor, action, target, detail);
+  writer_->committed();
 }
 
 std::vector<AuditEvent> Store::audit_events(std::size_t offset, std::size_t limit) const {
@@ -1136,6 +1302,7 @@ void Store::put_token(const TokenEntry& t) {
 
 bool Store::delete_token(const std::string& name) {
   std::lock_guard lock(write_mu_);
+  writer_->begin_write();
   Stmt s(*writer_, "DELETE FROM tokens WHERE name = ?");
   s.bind(1, name).run();
   return sqlite3_changes(writer_->db) > 0;

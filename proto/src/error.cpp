@@ -9,7 +9,7 @@
 namespace gonio {
 namespace {
 
-constexpr std::array<std::pair<Errc, std::string_view>, 18> kIds{{
+constexpr std::array<std::pair<Errc, std::string_view>, 19> kIds{{
     {Errc::invalid_argument, "invalid_argument"},
     {Errc::out_of_range, "out_of_range"},
     {Errc::parse_error, "parse_error"},
@@ -27,6 +27,7 @@ constexpr std::array<std::pair<Errc, std::string_view>, 18> kIds{{
     {Errc::unauthorized, "unauthorized"},
     {Errc::forbidden, "forbidden"},
     {Errc::plan_rejected, "plan_rejected"},
+    {Errc::storage_unavailable, "storage_unavailable"},
     {Errc::internal, "internal"},
 }};
 

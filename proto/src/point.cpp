@@ -112,6 +112,7 @@ void to_json(nlohmann::json& j, const PointRecord& p) {
   if (!p.budget.empty()) j["budget"] = p.budget;
   if (!p.sample_sensitivity.empty()) j["sample_sensitivity"] = p.sample_sensitivity;
   if (p.colour) j["colour"] = *p.colour;
+  if (p.integration_ms) j["integration_ms"] = *p.integration_ms;
 }
 
 void from_json(const nlohmann::json& j, PointRecord& p) {
@@ -153,6 +154,11 @@ void from_json(const nlohmann::json& j, PointRecord& p) {
   p.sample_sensitivity = r.optional<std::vector<SampleSensitivity>>("sample_sensitivity", {});
   p.colour.reset();
   if (const auto* c = r.raw("colour"); c && !c->is_null()) p.colour = c->get<ColourCheck>();
+  p.integration_ms.reset();
+  if (const auto* t = r.raw("integration_ms"); t && !t->is_null()) {
+    p.integration_ms = json_util::get_as<double>(*t, "integration_ms");
+    if (!(*p.integration_ms > 0)) throw Error::invalid("integration_ms", "must be > 0");
+  }
   r.finish();
   if (p.index < 0) throw Error::invalid("index", "must be >= 0");
 }

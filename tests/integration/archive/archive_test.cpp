@@ -145,6 +145,9 @@ TEST(Archive, ReshipIsIdempotentAndAStaleBacklogRaisesAWarning) {
   ASSERT_TRUE(eventually([&] { return c.call("archive.status")["backlog"] == 0; }, 30s))
       << c.call("archive.status").dump() << g.log_text();
   EXPECT_EQ(pg.query("SELECT count(*) FROM points WHERE instrument = 'solo'"), "13\n");
+  // The mock's photometer ranges at its own 100 ms; every point says so in the archive too.
+  EXPECT_EQ(pg.query("SELECT count(*) FROM sample_points WHERE instrument = 'solo' AND integration_ms = 100"),
+            "13\n");
 
   pg.stop();
   const auto r = c.call("archive.reship", json{{"scan", id}});

@@ -114,8 +114,9 @@ TEST(Reconnect, AutoResumeFinishesTheScanOnceThePhotometerIsBack) {
 // The faults that are not a lost link pause the scan and recover by resume alone: no
 // device is dropped or reopened.
 TEST(Reconnect, OtherScriptedFaultsRecoverByResumeWithoutReopeningADevice) {
-  for (const std::string fault : {"timeout_at_point = 3, timeout_wait_ms = 50", "saturate_at_point = 3",
-                                  "stall_at_move = 4", "garbage_at_point = 2"}) {
+  // (A saturated reading is ranged out by a shorter integration time: autorange_test.cpp.)
+  for (const std::string fault : {"timeout_at_point = 3, timeout_wait_ms = 50", "stall_at_move = 4",
+                                  "garbage_at_point = 2"}) {
     SCOPED_TRACE(fault);
     TempDir dir;
     MockOptions o;

@@ -207,7 +207,7 @@ TEST(ArchiveBatch, UpsertsParentsFirstEachOnceThenHistoryAndPointsInOrder) {
   EXPECT_TRUE(st[4].sql.starts_with("INSERT INTO points"));
   EXPECT_EQ(st[2].params.size(), 14u);       // one scan row although three outbox rows name it
   EXPECT_EQ(st[3].params.size(), 2u * 6u);   // two state changes
-  EXPECT_EQ(st[4].params.size(), 3u * 22u);  // three points
+  EXPECT_EQ(st[4].params.size(), 3u * 23u);  // three points
   EXPECT_NE(st[4].sql.find("ON CONFLICT (instrument, scan_id, idx) DO NOTHING"), std::string::npos);
   for (const auto& s : st) {
     EXPECT_NE(s.sql.find("ON CONFLICT"), std::string::npos) << s.sql;  // idempotent, all
@@ -215,20 +215,20 @@ TEST(ArchiveBatch, UpsertsParentsFirstEachOnceThenHistoryAndPointsInOrder) {
       EXPECT_EQ(s.params[i], std::optional<std::string>("gcms-a")) << s.sql;  // keyed by instrument
   }
   // Points in outbox order: idx is the third column of each row.
-  for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ(st[4].params[i * 22 + 2], std::to_string(i));
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ(st[4].params[i * 23 + 2], std::to_string(i));
   EXPECT_EQ(st[4].params[13], pg_float_array(std::vector<double>(31, 0.25)));  // measured
   EXPECT_FALSE(st[4].params[15].has_value());  // no prediction: NULL
 }
 
 TEST(ArchiveBatch, APointTwiceInOneBatchIsSentOnceAndBigBatchesAreChunked) {
   const auto twice = build_archive_batch("a", "v", input_with(4, true));
-  EXPECT_EQ(twice.back().params.size(), 4u * 22u);
+  EXPECT_EQ(twice.back().params.size(), 4u * 23u);
   const auto big = build_archive_batch("a", "v", input_with(5000));
   std::size_t rows = 0, statements = 0;
   for (const auto& s : big)
     if (s.sql.starts_with("INSERT INTO points")) {
       EXPECT_LE(s.params.size(), 65535u);  // PostgreSQL's limit
-      rows += s.params.size() / 22;
+      rows += s.params.size() / 23;
       ++statements;
     }
   EXPECT_EQ(rows, 5000u);

@@ -110,6 +110,11 @@ TEST(Config, RejectsUnknownKeysAndBadValuesNamingThem) {
             "auth.token[0].sha256");
   EXPECT_EQ(field_of("[webhook]\nurl = \"https://x/\"\n"), "webhook.url");
   EXPECT_EQ(field_of("[store]\nsynchronous = \"sometimes\"\n"), "store.synchronous");
+  EXPECT_EQ(field_of("[instrument]\nintegration_min_ms = 0\n"), "instrument.integration_min_ms");
+  EXPECT_EQ(field_of("[instrument]\nintegration_min_ms = 10\nintegration_max_ms = 5\n"),
+            "instrument.integration_max_ms");
+  EXPECT_EQ(field_of("[instrument]\nintegration_ms = 5000\n"), "instrument.integration_ms");
+  EXPECT_EQ(field_of("[instrument]\nautorange = 1\n"), "instrument.autorange");
   EXPECT_EQ(field_of("server = 3\n"), "server");
   EXPECT_EQ(field_of("[server\n"), "config");  // TOML syntax error
 }

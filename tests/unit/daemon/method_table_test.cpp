@@ -236,7 +236,8 @@ TEST_F(RegisteredMethods, AreTheTableAndTheOpenRpcDocument) {
   namespace code = rpc::code;
   for (int c : {-32700, -32600, -32601, -32602, -32603, code::unauthorized, code::forbidden, code::not_found,
                 code::invalid_state, code::instrument_busy, code::instrument_fault, code::plan_rejected,
-                code::limit_violation, code::unsupported, code::io_error, code::overloaded})
+                code::limit_violation, code::unsupported, code::io_error, code::overloaded,
+                code::storage_unavailable})
     EXPECT_TRUE(codes.contains(c)) << c;
 }
 

@@ -11,7 +11,8 @@ TEST(Error, IdsAreStableAndRoundTrip) {
   EXPECT_EQ(errc_id(Errc::plan_rejected), "plan_rejected");
   EXPECT_EQ(static_cast<int>(Errc::timeout), 10);
   EXPECT_EQ(static_cast<int>(Errc::plan_rejected), 23);
-  for (int c : {1, 2, 3, 4, 5, 6, 10, 11, 12, 13, 14, 15, 16, 20, 21, 22, 23, 99}) {
+  EXPECT_EQ(static_cast<int>(Errc::storage_unavailable), 24);
+  for (int c : {1, 2, 3, 4, 5, 6, 10, 11, 12, 13, 14, 15, 16, 20, 21, 22, 23, 24, 99}) {
     const auto e = static_cast<Errc>(c);
     EXPECT_EQ(errc_from_id(errc_id(e)), e) << c;
   }

@@ -224,3 +224,25 @@ TEST(MockInstrument, RegistryBuildsASharedLab) {
   EXPECT_EQ(code_of([] { make_photometer("scpi-tcp", json{{"host", "127.0.0.1"}, {"baud", 9600}}); }),
             Errc::invalid_argument);
 }
+
+// The lab's detector model follows the integration time: the signal grows with it, the
+// shot noise with its square root, and full scale is reached at a longer setting.
+TEST(MockInstrument, SignalAndNoiseFollowTheIntegrationTime) {
+  auto cfg = base_config();
+  cfg["full_scale_counts"] = 60000;  // the white reads 400 counts/ms: saturates above 150 ms
+  auto m = mock::make_mock(cfg);
+  const auto net = [&](double ms) {
+    m.photometer->set_integration_ms(ms, 1s);
+    const auto d = m.photometer->measure(Channel::dark, 1s);
+    const auto r = m.photometer->measure(Channel::reference, 1s, SaturationPolicy::flag);
+    EXPECT_DOUBLE_EQ(r.integration_ms, ms);
+    return std::pair{r.spectrum.values[1] - d.spectrum.values[1], r.spectrum.std_uncertainty[1]};
+  };
+  const auto [s25, u25] = net(25);
+  const auto [s100, u100] = net(100);
+  EXPECT_NEAR(s100 / s25, 4.0, 0.1);
+  EXPECT_NEAR(u100 / u25, 2.0, 0.1);  // √(signal): shot noise dominates the read noise here
+  m.photometer->set_integration_ms(200, 1s);
+  EXPECT_TRUE(m.photometer->measure(Channel::reference, 1s, SaturationPolicy::flag).saturated);
+  EXPECT_EQ(code_of([&] { m.photometer->measure(Channel::reference, 1s); }), Errc::saturated);
+}

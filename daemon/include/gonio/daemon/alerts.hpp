@@ -29,7 +29,13 @@ class AlertService {
   void set_sink(std::shared_ptr<AlertSink> sink);
   std::shared_ptr<AlertSink> sink() const;
 
+  // When the store cannot write (Error(storage_unavailable)), the alert is still logged,
+  // published and handed to the webhook, and held in memory (id 0) until flush_held() can
+  // store it: an alert about a full disk must not need the disk.
   Alert raise(const AlertDraft& draft);
+  // Stores the held alerts (publishing each stored one); stops at the first that cannot be.
+  void flush_held();
+  std::vector<Alert> held() const;
   Alert ack(std::int64_t id, const std::string& actor);
   // Appends `note` to alert `id`'s message and pushes the alert to subscribers again.
   Alert annotate(std::int64_t id, const std::string& note);
@@ -40,6 +46,12 @@ class AlertService {
   Severity webhook_min_;
   mutable std::mutex mu_;
   std::shared_ptr<AlertSink> sink_;
+  struct Held {
+    AlertDraft draft;
+    Alert alert;
+  };
+  std::vector<Held> held_;  // guarded by mu_
+  void announce(const Alert& a, bool created, bool escalated);
 };
 
 }  // namespace gonio::daemon

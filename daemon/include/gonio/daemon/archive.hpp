@@ -32,7 +32,7 @@ class AlertService;
 
 // ---- schema (archive_schema.cpp)
 
-inline constexpr int kArchiveSchemaVersion = 1;
+inline constexpr int kArchiveSchemaVersion = 2;
 // Migration k brings the archive from version k to k + 1 (one SQL text each).
 const std::vector<std::string>& archive_migrations();
 
@@ -128,6 +128,12 @@ class ArchiveShipper {
   std::string last_error_;
   int schema_version_ = 0;
   bool backlog_alerted_ = false;
+  // The backlog's age counts on the steady clock from when its oldest row was first seen
+  // (plus its wall-clock age then, never negative), so that a wall-clock step cannot raise
+  // or hold back the backlog warning.
+  std::optional<std::string> aged_row_;
+  std::chrono::seconds aged_base_{0};
+  std::chrono::steady_clock::time_point aged_since_{};
 };
 
 }  // namespace gonio::daemon

@@ -128,6 +128,9 @@ struct Config {
 
   // [store]
   bool synchronous_full = true;  // "full": fsync every committed point; "normal": WAL default
+  // Below this much free space in the state directory a `storage` warning is raised and no
+  // new scan starts; a store made read-only by a full disk writes again above it (+ reserve).
+  double min_free_mb = 64;
 
   // [instrument]
   std::string profile = "gcms4";  // preset name or JSON profile path
@@ -137,6 +140,15 @@ struct Config {
   milliseconds home_timeout{120000};
   milliseconds measure_timeout{30000};
   milliseconds settle{0};
+  // Auto-ranging (autorange.hpp): each point starts at integration_ms (unset: the
+  // photometer's own setting when goniod first reads it), saturation shortens it down to
+  // integration_min_ms, under-exposure lengthens it up to integration_max_ms. Off, or with a
+  // photometer whose integration time is not settable, a saturated reading is a fault.
+  bool autorange = true;
+  std::optional<double> integration_ms;
+  double integration_min_ms = 1;
+  double integration_max_ms = 2000;
+  double underexposed_snr = 10;
   // [instrument.limits]: the one table of soft limits and arm clearance, handed to the
   // driver registry, which guards the motion controller with it. An unset min_separation
   // takes the motion driver's default (the mock: its profile's arms.min_separation_deg).

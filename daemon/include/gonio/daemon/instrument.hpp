@@ -79,6 +79,9 @@ class Instrument {
   Instrument& operator=(const Instrument&) = delete;
 
   void start();
+  // The scans a crash left running could not be marked interrupted (the store cannot
+  // write): done with `reason` once it can. Call before start().
+  void recover_when_writable(std::string reason) { recover_reason_ = std::move(reason); }
   // Finishes the point in progress, parks the running scan as `interrupted` and joins the
   // thread. Idempotent.
   void shutdown();
@@ -160,6 +163,14 @@ class Instrument {
                   const std::string& actor);
   DeviceFacts device_facts() const;  // for check_plan
   void on_device_fault(const Error& e);
+  // The store cannot write (Error(storage_unavailable)): the scan pauses with a critical
+  // `storage` alert, written from the store's reserve or held in memory (storage.hpp).
+  void on_storage_fault(const Error& e);
+  // At most once a second, from the loop: the low-space warning, a read-only store's probe,
+  // and what waited for the store to write again (held alerts, a scan state, the recovery
+  // of the scans a crash left running). Runner thread.
+  void check_storage();
+  nlohmann::json storage_json() const;
   // The fault latch outlives the process: at start it is rebuilt from the unacknowledged
   // device_fault alerts, and a technician's resume or reset acknowledges them.
   void restore_fault_latch();
@@ -210,6 +221,22 @@ class Instrument {
   std::string fault_reason_;
   std::optional<std::pair<std::int64_t, std::chrono::steady_clock::time_point>> auto_resume_;
   std::map<std::int64_t, int> auto_resumes_;
+  // Auto-ranging (runner thread): the nominal integration time once known, and the setting
+  // last given to the photometer (reset when the photometer is opened again).
+  std::optional<double> nominal_integration_;
+  // Storage (runner thread, except storage_json()).
+  std::chrono::steady_clock::time_point storage_checked_{};
+  bool low_space_ = false;
+  struct UnsavedState {
+    std::int64_t scan = 0;
+    ScanState state = ScanState::paused;
+    std::string reason, actor;
+  };
+  std::optional<UnsavedState> unsaved_state_;  // guarded by sched_mu_
+  std::optional<std::string> recover_reason_;   // guarded by sched_mu_
+  std::optional<double> integration_set_;
+  double nominal_integration_ms();  // 0: no ranging
+  void set_integration(double ms);
   std::string state_ = "starting", state_detail_;
   std::unique_ptr<drivers::InstrumentOpener> opener_;
   Link links_[2];

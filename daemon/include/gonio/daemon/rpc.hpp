@@ -57,6 +57,7 @@ inline constexpr int limit_violation = -32007;   // a move outside soft limits /
 inline constexpr int unsupported = -32008;       // valid but not possible here
 inline constexpr int io_error = -32009;          // the server could not read or write a file
 inline constexpr int overloaded = -32010;        // too many requests in flight on a connection
+inline constexpr int storage_unavailable = -32011;  // the store cannot write; reads go on
 }  // namespace code
 
 // The JSON-RPC code of a gonio::Error.

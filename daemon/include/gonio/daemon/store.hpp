@@ -8,6 +8,14 @@
 // PRAGMA user_version; migrations run in order inside a transaction at open, and a file
 // written by a newer goniod is refused rather than guessed at.
 //
+// Storage failures (storage.hpp): a write that fails because the disk is full, the file
+// system read-only or the disk failing (SQLITE_FULL, SQLITE_IOERR_*, SQLITE_READONLY,
+// SQLITE_CANTOPEN) makes the store read-only: reads go on, and every write is refused with
+// Error(storage_unavailable) naming the directory and its free space, until the space is
+// back (store.min_free_mb plus the reserve) and a write succeeds again (probe() tries one).
+// The reserve file beside the database is released at SQLITE_FULL, so that the pause of
+// the running scan and its alert, written inside an Essential scope, still find room.
+//
 // Durability: with synchronous = FULL every committed point is on disk (WAL fsynced)
 // before insert_point() returns, which is what lets the scan runner move the arms only
 // after the previous point is safe. Writes go through one connection under a mutex;
@@ -27,6 +35,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gonio/daemon/config.hpp"
+#include "gonio/daemon/storage.hpp"
 #include "gonio/proto/enum_text.hpp"
 #include "gonio/proto/alert.hpp"
 #include "gonio/proto/point.hpp"
@@ -229,9 +238,46 @@ class Store {
   bool delete_token(const std::string& name);
   std::vector<TokenEntry> tokens() const;
 
+  // ---- storage (storage.hpp)
+  struct StorageState {
+    std::filesystem::path dir;
+    SpaceInfo space;
+    bool writable = true;   // false from a storage failure until a write goes through again
+    bool low = false;       // free space below store.min_free_mb
+    std::string fault;      // the failure that made it read-only (empty while writable)
+    std::uint64_t min_free_bytes = 0;
+    bool reserve = false;   // the reserve file is in place
+  };
+  static constexpr std::uint64_t kReserveBytes = 1 << 20;
+  StorageState storage() const;
+  bool writable() const noexcept { return !read_only_.load(); }
+  void set_min_free_mb(double mb);
+  // While read-only and the space is back: one small write (an audit row), which makes the
+  // store writable again when it goes through. Returns writable().
+  bool probe();
+  // Writes made on this thread while one lives may use the reserve (the pause of the
+  // running scan and its storage alert) and do not make the store writable again.
+  class Essential {
+   public:
+    Essential() noexcept;
+    ~Essential();
+    Essential(const Essential&) = delete;
+    Essential& operator=(const Essential&) = delete;
+  };
+
   struct Connection;  // a sqlite3 handle with its cached statements
 
  private:
+  // Marks the store read-only (releasing the reserve at SQLITE_FULL) and returns the error
+  // to throw. Called with the write lock held.
+  Error storage_failure(int sqlite_code, std::string_view what, std::string_view message);
+  // Before a write (write lock held): throws Error(storage_unavailable) while read-only and
+  // the space is still short.
+  void before_write();
+  // After a write went through (write lock held): writable again.
+  void after_commit();
+  std::filesystem::path reserve_path() const;
+  std::filesystem::path state_dir() const;  // absolute
   class ReadLease;
   ReadLease read() const;
   void migrate();
@@ -246,6 +292,11 @@ class Store {
   mutable std::mutex pool_mu_;
   mutable std::vector<std::unique_ptr<Connection>> readers_;
   std::atomic<bool> outbox_on_{false};
+  std::atomic<bool> read_only_{false};
+  std::atomic<bool> immutable_reads_{false};  // a read-only file system at open
+  mutable std::mutex space_mu_;
+  std::string fault_;
+  std::uint64_t min_free_bytes_ = 64ull << 20;
   std::mutex listener_mu_;
   std::function<void()> outbox_listener_;
 };

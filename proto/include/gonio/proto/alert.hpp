@@ -32,6 +32,7 @@ inline constexpr std::string_view calibration_hint = "calibration_hint"; // an i
 inline constexpr std::string_view reference_drift = "reference_drift";  // instrument health
 inline constexpr std::string_view device_fault = "device_fault";        // scan paused by a fault
 inline constexpr std::string_view scan_failed = "scan_failed";
+inline constexpr std::string_view storage = "storage";  // the store cannot write, or space is low
 }  // namespace alert_kind
 
 struct Alert {

@@ -30,6 +30,7 @@ enum class Errc : int {
   unauthorized = 21,     // no or bad credentials
   forbidden = 22,        // credentials lack the role
   plan_rejected = 23,    // a scan plan failed validation
+  storage_unavailable = 24,  // the store cannot write (disk full, read-only, I/O error): reads go on
   internal = 99,         // a bug: should never reach a user
 };
 

@@ -83,6 +83,9 @@ struct PointRecord {
   std::vector<SampleSensitivity> sample_sensitivity;
   std::optional<ColourCheck> colour;
   std::vector<std::string> flags;   // "no_prediction", "saturated", "reference_read", ...
+  // The photometer's integration time the point's readings used (auto-ranging); nullopt:
+  // unknown (a photometer that does not report it, or a point stored before it was kept).
+  std::optional<double> integration_ms;
 
   friend bool operator==(const PointRecord&, const PointRecord&) = default;
 };

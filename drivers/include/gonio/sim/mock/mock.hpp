@@ -23,7 +23,8 @@
 //   timeout_at_point N      the Nth sample reading never answers: timeout (after the call's
 //                           timeout or timeout_wait_ms, whichever is shorter)
 //   garbage_at_point N      the Nth sample reading is unreadable: protocol_error
-//   saturate_at_point N     the Nth sample reading is saturated: saturated
+//   saturate_at_point N     the Nth sample reading is saturated: saturated (goniod's
+//                           auto-ranging reads the point again, shorter, and goes on)
 //   stall_at_move N         the Nth move stalls half way: device_alarm (code 0x10,
 //                           excessive position deviation) and the arm stays there
 //
@@ -31,7 +32,8 @@
 //   {"profile": "gcms4", "sample": "lambert:albedo=0.5" | {...}, "wavelengths": "400:700:10",
 //    "arm_offsets_deg": {"incidence": 0, "receive": 0},
 //    "lamp_drift_per_s": 0, "gain_counts_per_ms": 400, "dark_counts_per_ms": 2,
-//    "read_noise_counts": 3, "full_scale_counts": 1e6, "integration_ms": 100,
+//    "read_noise_counts": 3, "full_scale_counts": 1e6, "integration_ms": 100 (settable:
+//    the signal grows with it, the shot noise with its square root),
 //    "speed_deg_s": 20, "time_scale": 0, "seed": 1,
 //    "estimator": {"rel_se": 0.01, "max_samples": 65536, "replicates": 8},
 //    "faults": {"disconnect_at_point": N, "timeout_at_point": N, "garbage_at_point": N,
