@@ -666,7 +666,10 @@ describe('dashboard', () => {
     await a.type($('login-token'), g.adminToken);
     await a.click($('login-submit'));
     await a.waitForSelector($('calibrate-form'), { timeout: T });
-    assert.match(await a.$eval($('profile-version'), (e) => e.textContent), new RegExp(`#${before.version}`));
+    // The version arrives with instrument.status, which the page asks for after it draws the
+    // form: wait for it rather than read it once.
+    await a.waitForFunction((s, v) => (document.querySelector(s)?.textContent || '').includes(`#${v}`),
+      { timeout: T }, $('profile-version'), before.version);
     assert.equal(await a.$eval($('calibrate-apply'), (e) => e.disabled), true, 'apply before a dry run');
     // Gain alone: quick, and separable on one scan.
     await a.$$eval(`${$('calibrate-form')} input[name=fit]`, (boxes) => boxes.forEach((b) => { if (b.checked !== (b.value === 'gain')) b.click(); }));
