@@ -161,20 +161,22 @@ class Evaluator {
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m()),
                                               static_cast<Eigen::Index>(n()));
     const int groups = n() == 0 ? 0 : *std::max_element(p_.group.begin(), p_.group.end()) + 1;
+    // The columns of group g from the model moved by the steps h.
+    const auto fill = [&](int g, const State& moved, const std::vector<double>& h) {
+      for (std::size_t i = 0; i < m(); ++i) {
+        const int c = static_cast<int>(i % p_.channels);
+        for (std::size_t j = 0; j < n(); ++j) {
+          if (p_.group[j] != g || (p_.channel[j] >= 0 && p_.channel[j] != c)) continue;
+          J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
+              (moved.beta[i] - base.beta[i]) / (h[j] * base.sigma[i]) * scale[j];
+        }
+      }
+    };
     std::vector<std::vector<double>> shared_h;
     const auto shared = steps_at_once(x, groups, shared_h);
     for (int g = 0; g < groups; ++g) {
       if (!shared.empty()) {
-        const auto& moved = shared[static_cast<std::size_t>(g)];
-        const auto& h = shared_h[static_cast<std::size_t>(g)];
-        for (std::size_t i = 0; i < m(); ++i) {
-          const int c = static_cast<int>(i % p_.channels);
-          for (std::size_t j = 0; j < n(); ++j) {
-            if (p_.group[j] != g || (p_.channel[j] >= 0 && p_.channel[j] != c)) continue;
-            J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
-                (moved.beta[i] - base.beta[i]) / (h[j] * base.sigma[i]) * scale[j];
-          }
-        }
+        fill(g, shared[static_cast<std::size_t>(g)], shared_h[static_cast<std::size_t>(g)]);
         continue;
       }
       auto xp = x;
@@ -192,14 +194,7 @@ class Evaluator {
           if (p_.group[j] == g) xp[j] += (h[j] = -h[j]);
         moved = compute(xp);
       }
-      for (std::size_t i = 0; i < m(); ++i) {
-        const int c = static_cast<int>(i % p_.channels);
-        for (std::size_t j = 0; j < n(); ++j) {
-          if (p_.group[j] != g || (p_.channel[j] >= 0 && p_.channel[j] != c)) continue;
-          J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
-              (moved.beta[i] - base.beta[i]) / (h[j] * base.sigma[i]) * scale[j];
-        }
-      }
+      fill(g, moved, h);
     }
     return J;
   }
