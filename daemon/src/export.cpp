@@ -28,7 +28,7 @@ std::string to_csv(const Scan& scan, const std::vector<PointRecord>& points, boo
                        utc::now());
     out += "index,geometry_index,repeat,theta_i,phi_i,theta_r,phi_r,actual_theta_i,actual_theta_r,"
            "wavelength_nm,measured,measured_u,predicted,predicted_se,z_max,delta_e00,diverged,"
-           "flags\n";
+           "flags,integration_ms\n";
   }
   for (const auto& p : points) {
     std::string flags;
@@ -45,8 +45,10 @@ std::string to_csv(const Scan& scan, const std::vector<PointRecord>& points, boo
                            csv_number(p.predicted->std_uncertainty[c]));
       else
         out += ",,";
-      out += fmt::format("{},{},{},{}\n", p.z_max ? csv_number(*p.z_max) : "",
-                         p.delta_e00 ? csv_number(*p.delta_e00) : "", p.diverged ? 1 : 0, flags);
+      // The integration time the point was read at (auto-ranging), empty when not known.
+      out += fmt::format("{},{},{},{},{}\n", p.z_max ? csv_number(*p.z_max) : "",
+                         p.delta_e00 ? csv_number(*p.delta_e00) : "", p.diverged ? 1 : 0, flags,
+                         p.integration_ms ? csv_number(*p.integration_ms) : "");
     }
   }
   return out;

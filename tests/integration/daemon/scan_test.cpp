@@ -57,6 +57,19 @@ TEST(Scan, FullScanOnTheMockStoresMeasuredAndPredicted) {
   const auto csv = c.call("scan.export", json{{"scan", id}, {"format", "csv"}});
   EXPECT_EQ(csv["points"], 13);
   EXPECT_NE(csv["content"].get<std::string>().find("wavelength_nm"), std::string::npos);
+  // The last column is the integration time each point was read at (the mock's is settable).
+  {
+    const auto text = csv["content"].get<std::string>();
+    const auto header = text.find("index,");
+    ASSERT_NE(header, std::string::npos);
+    const auto header_end = text.find('\n', header);
+    EXPECT_TRUE(text.substr(header, header_end - header).ends_with(",flags,integration_ms"));
+    const auto row_end = text.find('\n', header_end + 1);
+    const auto row = text.substr(header_end + 1, row_end - header_end - 1);
+    const auto last = row.substr(row.find_last_of(',') + 1);
+    EXPECT_FALSE(last.empty()) << row;
+    EXPECT_GT(std::stod(last), 0) << row;
+  }
   const auto ssdd = c.call("scan.export", json{{"scan", id}, {"format", "ssdd"}});
   EXPECT_NE(ssdd["content"].get<std::string>().find("DATA_TYPE brdf"), std::string::npos)
       << ssdd["content"].get<std::string>().substr(0, 200);
