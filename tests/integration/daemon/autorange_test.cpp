@@ -111,58 +111,21 @@ TEST(Autorange, OffASaturatedReadingPausesTheScanAsBefore) {
   EXPECT_NE(sc["reason"].get<std::string>().find("saturated"), std::string::npos) << sc["reason"];
 }
 
-// gonio-devsim's SCPI photometer on TCP with the given simulator config; the port it bound.
-class ScpiDevsim {
- public:
-  ScpiDevsim(const fs::path& dir, const json& config) {
-    const auto cfg = (dir / "scpi.json").string();
-    std::ofstream(cfg) << config.dump();
-    int fds[2];
-    if (::pipe(fds) != 0) throw std::runtime_error("pipe");
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_adddup2(&fa, fds[1], 1);
-    posix_spawn_file_actions_addclose(&fa, fds[0]);
-    const std::string exe = std::string(GONIO_BIN_DIR) + "/gonio-devsim";
-    std::vector<std::string> args{exe, "--scpi-tcp", "0", "--scpi-config", cfg, "--sample", "lambert:albedo=0.5"};
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    const int rc = posix_spawn(&pid_, exe.c_str(), &fa, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&fa);
-    ::close(fds[1]);
-    if (rc != 0) throw std::runtime_error("cannot start " + exe);
-    FILE* f = ::fdopen(fds[0], "r");
-    char line[256];
-    while (std::fgets(line, sizeof line, f) != nullptr) {
-      std::string s(line);
-      if (!s.empty() && s.back() == '\n') s.pop_back();
-      if (s.rfind("scpi-tcp ", 0) == 0) port = port_of(s);
-      if (s == "ready") break;
-    }
-    std::fclose(f);
-    if (port == 0) throw std::runtime_error("gonio-devsim printed no TCP endpoint");
-  }
-  ~ScpiDevsim() {
-    ::kill(pid_, SIGTERM);
-    ::waitpid(pid_, nullptr, 0);
-  }
-  ScpiDevsim(const ScpiDevsim&) = delete;
-  ScpiDevsim& operator=(const ScpiDevsim&) = delete;
-  int port = 0;
-
- private:
-  pid_t pid_ = -1;
-};
+// gonio-devsim's SCPI photometer on TCP with the given simulator config.
+std::unique_ptr<Devsim> scpi_devsim(const fs::path& dir, const json& config) {
+  const auto cfg = (dir / "scpi.json").string();
+  std::ofstream(cfg) << config.dump();
+  return std::make_unique<Devsim>(0, std::vector<std::string>{"--scpi-config", cfg});
+}
 
 // The real SCPI driver against gonio-devsim: its reference white saturates at the nominal
 // 100 ms (50000 counts against a full scale of 20000), so every point is ranged to 25 ms.
 TEST(Autorange, ScpiPhotometerOnGonioDevsimIsRangedThroughItsIntegrationTime) {
   TempDir dir;
-  ScpiDevsim sim(dir.path, json{{"full_scale_counts", 20000}});
+  const auto sim = scpi_devsim(dir.path, json{{"full_scale_counts", 20000}});
   std::ostringstream cfg;
   cfg << "[server]\nlog_level = \"debug\"\n\n[instrument.motion]\ndriver = \"mock\"\n"
-      << "\n[instrument.photometer]\ndriver = \"scpi-tcp\"\nhost = \"127.0.0.1\"\nport = " << sim.port
+      << "\n[instrument.photometer]\ndriver = \"scpi-tcp\"\nhost = \"127.0.0.1\"\nport = " << sim->port
       << "\n\n[twin]\nthreads = 1\nrel_se = 0.01\nreplicates = 8\n";
   Goniod g(dir.path / "state", cfg.str());
   auto c = g.unix_conn();
@@ -178,10 +141,10 @@ TEST(Autorange, ScpiPhotometerOnGonioDevsimIsRangedThroughItsIntegrationTime) {
 // still saturates there is a fault that says so, not an out-of-range error.
 TEST(Autorange, APhotometerThatRefusesAShorterSettingEndsTheRangingWithASaturationFault) {
   TempDir dir;
-  ScpiDevsim sim(dir.path, json{{"full_scale_counts", 20000}, {"min_integration_ms", 50}});
+  const auto sim = scpi_devsim(dir.path, json{{"full_scale_counts", 20000}, {"min_integration_ms", 50}});
   std::ostringstream cfg;
   cfg << "[server]\nlog_level = \"debug\"\n\n[instrument.motion]\ndriver = \"mock\"\n"
-      << "\n[instrument.photometer]\ndriver = \"scpi-tcp\"\nhost = \"127.0.0.1\"\nport = " << sim.port
+      << "\n[instrument.photometer]\ndriver = \"scpi-tcp\"\nhost = \"127.0.0.1\"\nport = " << sim->port
       << "\n\n[twin]\nthreads = 1\nrel_se = 0.01\nreplicates = 8\n";
   Goniod g(dir.path / "state", cfg.str());
   auto c = g.unix_conn();

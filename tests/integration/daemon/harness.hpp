@@ -7,6 +7,7 @@
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
+#include <spawn.h>
 #include <signal.h>
 #include <sys/socket.h>
 #include <sys/un.h>
@@ -14,6 +15,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <deque>
 #include <filesystem>
@@ -471,5 +473,53 @@ inline json wait_state(Conn& c, std::int64_t scan, const std::vector<std::string
   }, timeout);
   return sc;
 }
+
+// gonio-devsim serving a SCPI photometer on TCP `want_port` (0: any), with the given extra
+// arguments (e.g. --scpi-config FILE); `port` is the port it bound. stop() kills it at once,
+// as a power cut would; the destructor does the same.
+class Devsim {
+ public:
+  explicit Devsim(int want_port, std::vector<std::string> extra = {}) {
+    int fds[2];
+    if (::pipe(fds) != 0) throw std::runtime_error("pipe");
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_adddup2(&fa, fds[1], 1);
+    posix_spawn_file_actions_addclose(&fa, fds[0]);
+    const std::string exe = std::string(GONIO_BIN_DIR) + "/gonio-devsim";
+    std::vector<std::string> args{exe, "--scpi-tcp", std::to_string(want_port), "--sample", "lambert:albedo=0.5"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    const int rc = posix_spawn(&pid_, exe.c_str(), &fa, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&fa);
+    ::close(fds[1]);
+    if (rc != 0) throw std::runtime_error("cannot start " + exe);
+    FILE* f = ::fdopen(fds[0], "r");
+    char line[256];
+    while (std::fgets(line, sizeof line, f) != nullptr) {
+      std::string s(line);
+      if (!s.empty() && s.back() == '\n') s.pop_back();
+      if (s.rfind("scpi-tcp ", 0) == 0) port = port_of(s);
+      if (s == "ready") break;
+    }
+    std::fclose(f);
+    if (port == 0) throw std::runtime_error("gonio-devsim printed no TCP endpoint");
+  }
+  ~Devsim() { stop(); }
+  Devsim(const Devsim&) = delete;
+  Devsim& operator=(const Devsim&) = delete;
+  void stop() {
+    if (pid_ <= 0) return;
+    ::kill(pid_, SIGKILL);
+    ::waitpid(pid_, nullptr, 0);
+    pid_ = -1;
+  }
+  int port = 0;
+
+ private:
+  pid_t pid_ = -1;
+};
 
 }  // namespace gonio::test

@@ -139,48 +139,6 @@ TEST(Reconnect, OtherScriptedFaultsRecoverByResumeWithoutReopeningADevice) {
 
 // ---- a SCPI photometer on TCP whose device reboots -------------------------------------
 
-// gonio-devsim serving a SCPI photometer on TCP `port` (0: any); returns the port it bound.
-class Devsim {
- public:
-  explicit Devsim(int want_port) {
-    int fds[2];
-    if (::pipe(fds) != 0) throw std::runtime_error("pipe");
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_adddup2(&fa, fds[1], 1);
-    posix_spawn_file_actions_addclose(&fa, fds[0]);
-    const std::string exe = std::string(GONIO_BIN_DIR) + "/gonio-devsim";
-    std::vector<std::string> args{exe, "--scpi-tcp", std::to_string(want_port), "--sample", "lambert:albedo=0.5"};
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    const int rc = posix_spawn(&pid_, exe.c_str(), &fa, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&fa);
-    ::close(fds[1]);
-    if (rc != 0) throw std::runtime_error("cannot start " + exe);
-    FILE* f = ::fdopen(fds[0], "r");
-    char line[256];
-    while (std::fgets(line, sizeof line, f) != nullptr) {
-      std::string s(line);
-      if (!s.empty() && s.back() == '\n') s.pop_back();
-      if (s.rfind("scpi-tcp ", 0) == 0) port = port_of(s);
-      if (s == "ready") break;
-    }
-    std::fclose(f);
-    if (port == 0) throw std::runtime_error("gonio-devsim printed no TCP endpoint");
-  }
-  ~Devsim() { stop(); }
-  void stop() {
-    if (pid_ <= 0) return;
-    ::kill(pid_, SIGKILL);  // a power cut, not a clean shutdown
-    ::waitpid(pid_, nullptr, 0);
-    pid_ = -1;
-  }
-  int port = 0;
-
- private:
-  pid_t pid_ = -1;
-};
 
 TEST(Reconnect, ScpiPhotometerOnTcpIsReopenedAfterTheDeviceReboots) {
   TempDir dir;
