@@ -562,6 +562,8 @@ describe('dashboard', () => {
     assert.ok(stored.budget.length > 0, 'the point has a budget');
     await fill($('point-index'), '3');
     await page.$eval($('point-index'), (e) => e.dispatchEvent(new Event('change', { bubbles: true })));
+    // The details of the point shown before stay until point 3's arrive: wait for those.
+    await page.waitForFunction((s) => /Point 3/.test(document.querySelector(s)?.textContent || ''), { timeout: T }, $('point-details'));
     await page.waitForSelector(`${$('point-details')} ${$('point-budget')}`, { timeout: T });
     assert.equal((await page.$$(`${$('point-budget')} ${$('budget-row')}`)).length, stored.budget.length);
     assert.match(await page.$eval($('point-details'), (e) => e.textContent), /Point 3/);
