@@ -150,7 +150,58 @@ void ScanPlan::validate(std::string_view field) const {
   if (priority < kMinPriority || priority > kMaxPriority)
     throw Error::out_of_range(f("priority"), priority, kMinPriority, kMaxPriority);
   if (not_before) (void)utc::parse(*not_before, f("not_before"));
+  if (adaptive) {
+    const auto& a = *adaptive;
+    if (repeats != 1)
+      throw Error::invalid(f("repeats"), "must be 1 in an adaptive scan (each candidate is measured "
+                                         "at most once)");
+    // Parameters mode may read a candidate up to three times (twin/design.md), curve mode once.
+    const auto per = a.mode == AdaptiveMode::parameters ? 3 : 1;
+    const auto candidates = static_cast<int>(std::min<std::size_t>(per * geometries.size(), kMaxPoints));
+    if (a.max_points < 1 || a.max_points > candidates)
+      throw Error::out_of_range(f("adaptive.max_points"), a.max_points, 1, candidates);
+    if (a.mode == AdaptiveMode::parameters) {
+      if (a.model.empty())
+        throw Error::invalid(f("adaptive.model"), "is required in parameters mode (a BSDF spec "
+                                                  "with '?' marks, e.g. \"conductor:alpha=?\")");
+      if (!(a.target_rel_u > 0 && a.target_rel_u <= 1))
+        throw Error::out_of_range(f("adaptive.target_rel_u"), a.target_rel_u, 0, 1);
+    } else if (!(a.tolerance > 0 && a.tolerance <= 1)) {
+      throw Error::out_of_range(f("adaptive.tolerance"), a.tolerance, 0, 1);
+    }
+  }
 }
+
+void to_json(nlohmann::json& j, const AdaptivePlan& a) {
+  j = nlohmann::json{{"mode", to_text(a.mode)}, {"max_points", a.max_points}};
+  if (a.mode == AdaptiveMode::parameters) {
+    j["model"] = a.model;
+    j["target_rel_u"] = a.target_rel_u;
+  } else {
+    j["tolerance"] = a.tolerance;
+  }
+}
+
+namespace {
+
+AdaptivePlan adaptive_from_json(const nlohmann::json& j) {
+  if (!j.is_object()) throw Error::invalid("adaptive", "expected an object, got " + json_util::type_name(j));
+  json_util::ObjectReader r(j, "adaptive");
+  AdaptivePlan a;
+  a.mode = parse_enum<AdaptiveMode>(r.required<std::string>("mode"), "adaptive.mode");
+  a.max_points = r.required<int>("max_points");
+  // The other mode's keys are left unread, so finish() names them.
+  if (a.mode == AdaptiveMode::parameters) {
+    a.model = r.required<std::string>("model");
+    a.target_rel_u = r.required<double>("target_rel_u");
+  } else {
+    a.tolerance = r.required<double>("tolerance");
+  }
+  r.finish();
+  return a;
+}
+
+}  // namespace
 
 void to_json(nlohmann::json& j, const ScanPlan& p) {
   j = nlohmann::json{{"sample", p.sample_id},
@@ -163,6 +214,7 @@ void to_json(nlohmann::json& j, const ScanPlan& p) {
                      {"priority", p.priority},
                      {"not_before", p.not_before ? nlohmann::json(*p.not_before)
                                                  : nlohmann::json(nullptr)}};
+  if (p.adaptive) j["adaptive"] = *p.adaptive;
 }
 
 void from_json(const nlohmann::json& j, ScanPlan& p) {
@@ -222,6 +274,7 @@ void from_json(const nlohmann::json& j, ScanPlan& p) {
   p.priority = r.optional<int>("priority", 0);
   if (const auto* nb = r.raw("not_before"); nb && !nb->is_null())
     p.not_before = json_util::get_as<std::string>(*nb, "not_before");
+  if (const auto* a = r.raw("adaptive"); a && !a->is_null()) p.adaptive = adaptive_from_json(*a);
   r.finish();
   p.validate("");
 }

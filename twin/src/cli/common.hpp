@@ -54,6 +54,7 @@ int guarded(const std::function<int()>& body);
 void add_predict(CLI::App& app);
 void add_error_map(CLI::App& app);
 void add_plan(CLI::App& app);
+void add_design(CLI::App& app);
 void add_render(CLI::App& app);
 void add_convert(CLI::App& app);
 void add_fit(CLI::App& app);

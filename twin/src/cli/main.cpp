@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   add_predict(app);
   add_error_map(app);
   add_plan(app);
+  add_design(app);
   add_render(app);
   add_convert(app);
   add_fit(app);

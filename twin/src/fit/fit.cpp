@@ -218,6 +218,15 @@ FitResult fit_material(const MeasuredData& data, std::string_view model,
   auto problem = base_problem(data);
   problem.params = tmpl.parameters();
   problem.channel = tmpl.channel();
+  if (!options.start.empty()) {
+    if (options.start.size() != problem.params.size())
+      throw Error::invalid("start", fmt::format("has {} values for {} free parameters",
+                                                options.start.size(), problem.params.size()));
+    for (std::size_t j = 0; j < problem.params.size(); ++j) {
+      auto& q = problem.params[j];
+      q.start = std::clamp(options.start[j], q.lo + 1e-3 * (q.hi - q.lo), q.hi - 1e-3 * (q.hi - q.lo));
+    }
+  }
   int group = -1;
   for (std::size_t j = 0; j < problem.params.size(); ++j) {
     if (problem.channel[j] <= 0) ++group;  // a per-channel mark is one group

@@ -13,7 +13,12 @@
 //    "grids": ["in=45;out=-80:80:2"],              // either or both of these two
 //    "wavelengths": "400:700:10" | [450, 550],      // default 400:700:10
 //    "repeats": 1, "reference": {"mode": "every_point" | "interval" | "start", "interval": 10},
-//    "priority": 0, "not_before": "2025-01-01T12:00:00Z"}
+//    "priority": 0, "not_before": "2025-01-01T12:00:00Z",
+//    "adaptive": {"mode": "parameters", "model": "conductor:alpha=?", "target_rel_u": 0.02,
+//                 "max_points": 40} | {"mode": "curve", "tolerance": 0.01, "max_points": 60}}
+// An adaptive plan's geometries are candidates: goniod measures the ones the twin chooses,
+// in the order it chooses them, each at most three times in parameters mode and once in
+// curve mode (twin/design.md).
 // Validation here covers the syntax and the fixed limits; limits that depend on the
 // instrument (soft limits, arm collision zone, photometer range) are checked by the daemon.
 #pragma once
@@ -56,6 +61,29 @@ inline constexpr EnumNames<ReferenceMode, 3> kReferenceModeNames{{
 }};
 constexpr const auto& enum_names(ReferenceMode) { return kReferenceModeNames; }  // proto/enum_text.hpp
 
+enum class AdaptiveMode {
+  parameters,  // fit a model; measure where its parameters' uncertainty falls most
+  curve,       // no model; measure where the interpolated curve is least certain
+};
+inline constexpr EnumNames<AdaptiveMode, 2> kAdaptiveModeNames{{
+    {AdaptiveMode::parameters, "parameters"},
+    {AdaptiveMode::curve, "curve"},
+}};
+constexpr const auto& enum_names(AdaptiveMode) { return kAdaptiveModeNames; }  // proto/enum_text.hpp
+
+// The stopping rule of an adaptive scan. The model's syntax (a BSDF spec with '?' marks) is
+// checked by the daemon, which knows the models.
+struct AdaptivePlan {
+  AdaptiveMode mode = AdaptiveMode::parameters;
+  std::string model;          // parameters mode
+  double target_rel_u = 0.05; // parameters mode: stop when every u/|value| is at most this
+  double tolerance = 0.01;    // curve mode: stop when the estimated interpolation error is
+                              // at most this, relative to the curve
+  int max_points = 50;        // never more; at most 3 × (parameters) or 1 × (curve) the candidates
+
+  friend bool operator==(const AdaptivePlan&, const AdaptivePlan&) = default;
+};
+
 struct ScanPlan {
   static constexpr std::size_t kMaxPoints = 100000;
   static constexpr int kMaxRepeats = 100;
@@ -72,10 +100,14 @@ struct ScanPlan {
   int reference_interval = 10;
   int priority = 0;
   std::optional<std::string> not_before;  // UTC ISO-8601
+  std::optional<AdaptivePlan> adaptive;   // the geometries are candidates
 
+  // An adaptive plan's upper bound: it may complete sooner.
   std::size_t point_count() const noexcept {
+    if (adaptive) return static_cast<std::size_t>(adaptive->max_points);
     return geometries.size() * static_cast<std::size_t>(repeats);
   }
+  // Not for adaptive plans, whose points measure the geometries their loop chose.
   std::size_t geometry_index(std::size_t point) const noexcept {
     return point / static_cast<std::size_t>(repeats);
   }
@@ -88,6 +120,7 @@ struct ScanPlan {
   friend bool operator==(const ScanPlan&, const ScanPlan&) = default;
 };
 
+void to_json(nlohmann::json& j, const AdaptivePlan& a);
 void to_json(nlohmann::json& j, const ScanPlan& p);
 void from_json(const nlohmann::json& j, ScanPlan& p);
 

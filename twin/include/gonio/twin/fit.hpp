@@ -141,6 +141,9 @@ struct FitOptions {
   // parameters acting on every channel, each refined briefly at the nominal directions
   // before the fit proper; ≤ 1: the given start only.
   int starts = 12;
+  // Start values in the order of the '?' marks, replacing the template's (a warm start from
+  // an earlier fit); empty: the template's. Values outside a bound are moved inside it.
+  std::vector<double> start;
   // χ²/dof above this is a misfit: a warning names the worst regions.
   double misfit_limit = 2;
   void validate() const;

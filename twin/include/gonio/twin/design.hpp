@@ -1,0 +1,234 @@
+// Sequential design: which candidate geometry an adaptive scan measures next (twin/design.md).
+//
+// A scan's candidates are its plan's geometries; each is measured at most once. A design is
+// fed the points as they are measured and answers, at any moment, the next candidate to
+// measure and whether its stopping rule holds.
+//
+//   ParameterDesign  a model with free parameters ('?' marks, as fit_material): measures
+//                    seeds, fits, then picks the candidate that adds most information
+//                    about the parameters per second of instrument time (Bayesian
+//                    D-optimality on the twin's Jacobian); done when every free
+//                    parameter's relative standard uncertainty is at most the target.
+//   CurveDesign      no model: refines the measured curves where the interpolated curve is
+//                    least certain (the gap between a linear and a cubic interpolant);
+//                    done when that estimate is within the tolerance everywhere.
+//
+// Choosing while the arms move: next() takes the candidates already chosen but not yet
+// measured (`pending`). The information a point brings about the parameters depends on
+// where it is, not on what it reads (the design is linearised at the current estimate),
+// so a pending point is counted before its reading arrives, and the runner can ask for the
+// next choice while the current point is being measured.
+//
+// Not thread-safe: one thread at a time (goniod's adaptive loop owns one on its worker).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "gonio/proto/geometry.hpp"
+#include "gonio/proto/spectrum.hpp"
+#include "gonio/twin/fit.hpp"
+#include "gonio/twin/instrument.hpp"
+
+namespace gonio::twin {
+
+// How long the instrument takes per point: the arms move one after the other at a finite
+// speed, settle, and the photometer reads the dark, the white and the sample.
+struct ScanTiming {
+  double speed_deg_s = 20;  // per arm (the mock's default; a GCMS-4 arm is slower)
+  double settle_s = 0.2;    // after any move
+  double reading_s = 2;     // per point, all wavelengths
+  // Throws Error naming the field (speed 0.1–1000 °/s, settle 0–60 s, reading 0–3600 s).
+  void validate() const;
+  double move_s(const Geometry& from, const Geometry& to) const;
+  double point_s(const Geometry& from, const Geometry& to) const { return move_s(from, to) + reading_s; }
+  // A whole sequence of geometries, from the arms at `start`.
+  double total_s(const Geometry& start, const std::vector<Geometry>& sequence) const;
+};
+
+enum class DesignState { running, target_reached, max_points };
+std::string_view to_text(DesignState s);
+
+struct EstimatedParameter {
+  std::string name;
+  double value = 0;
+  double u = 0;  // standard uncertainty (k = 1), from the latest fit
+};
+
+// What an adaptive scan shows (scan.get's `adaptive`).
+struct DesignStatus {
+  std::string mode;  // "parameters" or "curve"
+  DesignState state = DesignState::running;
+  std::size_t points_used = 0;
+  std::vector<EstimatedParameter> parameters;  // parameters mode, after the first fit
+  std::optional<double> estimated_error;       // curve mode: max over the candidates
+  std::optional<double> chi2_per_dof;          // parameters mode
+  bool misfit = false;                          // χ²/dof above the fit's misfit limit
+  std::vector<std::string> warnings;
+  nlohmann::json to_json() const;
+};
+
+class Design {
+ public:
+  virtual ~Design() = default;
+  const std::vector<Geometry>& candidates() const noexcept { return candidates_; }
+  // The candidates measured first, before any choice (in measuring order).
+  virtual std::vector<std::size_t> seeds() const = 0;
+  // A measured point of candidate `c` (its nominal geometry is the candidate's).
+  virtual void add(std::size_t c, const MeasuredPoint& p) = 0;
+  // Brings the estimate up to date with every point added (parameters mode: a refit).
+  virtual void update() = 0;
+  // The candidate to measure next, the arms standing at `arms` after the pending points;
+  // nullopt when no candidate is left worth measuring, or when the points in hand and
+  // pending are expected to reach the target: the caller then adds the pending points,
+  // updates, and asks again unless target_reached(). Uses the estimate of the last update.
+  virtual std::optional<std::size_t> next(const std::vector<std::size_t>& pending,
+                                          const Geometry& arms) const = 0;
+  // The stopping rule held at the last update.
+  virtual bool target_reached() const = 0;
+  virtual DesignStatus status() const = 0;
+  std::size_t measured() const noexcept { return measured_.size(); }
+  // Readings of candidate c so far, and how many one candidate may have.
+  int readings(std::size_t c) const;
+  int max_readings() const noexcept { return max_readings_; }
+  // Whether c may be chosen with `pending` chosen before it.
+  bool available(std::size_t c, const std::vector<std::size_t>& pending) const;
+
+ protected:
+  Design(std::vector<Geometry> candidates, int max_readings);
+  void mark(std::size_t c);  // throws for an unknown candidate or one read max_readings times
+  std::vector<Geometry> candidates_;
+  std::vector<std::size_t> measured_;  // in the order measured (a candidate read again recurs)
+  std::vector<int> readings_;
+  int max_readings_ = 1;
+};
+
+struct ParameterDesignOptions {
+  double target_rel_u = 0.05;
+  // Readings of one candidate: reading the most informative geometries again is what an
+  // optimal design does; the cap keeps it spread, so that a model that misses at one
+  // geometry cannot take the whole scan there.
+  int max_readings = 3;
+  ScanTiming timing;
+  FitOptions fit;                      // the refits (warm started from the last one)
+  std::uint64_t jacobian_samples = 1u << 12;  // per candidate, for the information
+  int jacobian_replicates = 8;
+  unsigned threads = 0;                // 0: all cores
+  void validate() const;
+};
+
+class ParameterDesign final : public Design {
+ public:
+  // `model` a spec with '?' marks; throws Error(invalid_argument) naming `model` for one the
+  // twin cannot build, and for a bad option.
+  ParameterDesign(std::string model, std::vector<Geometry> candidates, WavelengthGrid grid,
+                  InstrumentProfile profile, ParameterDesignOptions options);
+  std::vector<std::size_t> seeds() const override;
+  void add(std::size_t c, const MeasuredPoint& p) override;
+  void update() override;
+  std::optional<std::size_t> next(const std::vector<std::size_t>& pending,
+                                  const Geometry& arms) const override;
+  bool target_reached() const override;
+  DesignStatus status() const override;
+  // The latest fit (none before the first update with enough points).
+  const std::optional<FitResult>& fit() const noexcept { return fit_; }
+  // The current estimate of the free parameters (the template's starts before any fit).
+  const std::vector<double>& estimate() const noexcept { return x_; }
+
+ private:
+  void linearise();  // candidates' Jacobians and predicted β at x_
+  double log_det_gain(const std::vector<double>& info_inv, std::size_t c) const;
+  std::vector<double> information(const std::vector<std::size_t>& extra) const;
+
+  std::string model_;
+  WavelengthGrid grid_;
+  InstrumentProfile profile_;
+  ParameterDesignOptions options_;
+  std::unique_ptr<ModelTemplate> tmpl_;
+  MeasuredData data_;
+  std::vector<double> x_;                 // current estimate
+  std::optional<FitResult> fit_;
+  std::string note_;                      // why the last refit failed
+  std::vector<std::vector<double>> jac_;  // per candidate: channels × parameters, row-major
+  std::vector<std::vector<double>> beta_; // per candidate: predicted β
+  std::vector<std::vector<double>> w_;    // per candidate: 1/u² per channel (predicted u)
+  std::vector<double> prior_;             // prior precision per parameter (diagonal)
+};
+
+struct CurveDesignOptions {
+  double tolerance = 0.01;  // relative to the curve
+  ScanTiming timing;
+  // Seeds: both ends, the specular direction and points at most this far apart.
+  double seed_spacing_deg = 10;
+  // The readings' own noise is no interpolation error: a gap below k·u is not refined.
+  double coverage_k = 2;
+  void validate() const;
+};
+
+class CurveDesign final : public Design {
+ public:
+  CurveDesign(std::vector<Geometry> candidates, CurveDesignOptions options);
+  std::vector<std::size_t> seeds() const override;
+  void add(std::size_t c, const MeasuredPoint& p) override;
+  void update() override;
+  std::optional<std::size_t> next(const std::vector<std::size_t>& pending,
+                                  const Geometry& arms) const override;
+  bool target_reached() const override;
+  DesignStatus status() const override;
+  // Per candidate: the estimated relative error of the interpolated curve (0 where
+  // measured), from the last update.
+  const std::vector<double>& estimated_errors() const noexcept { return error_; }
+  // The interpolated curve (linear between the measured neighbours along its curve) at
+  // candidate c, per channel; the measurement itself where measured. Empty when c's curve
+  // has fewer than two measured points around it.
+  std::vector<double> interpolate(std::size_t c) const;
+
+ private:
+  struct Curve {
+    std::vector<std::size_t> members;  // candidate indices by receiving angle
+  };
+  CurveDesignOptions options_;
+  std::vector<Curve> curves_;
+  std::vector<std::size_t> curve_of_, position_;  // per candidate
+  std::vector<MeasuredPoint> points_;             // per candidate (empty: not measured)
+  std::vector<double> error_;
+  double max_error_ = 1e300;
+};
+
+// The offline study behind `gonio-twin design`: a virtual sample (`truth`) measured with
+// Gaussian noise u = √((rel·β)² + abs²) through the twin, once on every candidate (the
+// uniform grid, fitted) and once adaptively; what each costs and what it determines.
+struct DesignStudyOptions {
+  std::string truth;     // the virtual sample; empty: the model at its start values
+  double noise_rel = 0.005, noise_abs = 0.0005;
+  std::uint64_t seed = 1;
+  int max_points = 50;
+  ParameterDesignOptions parameters;
+  CurveDesignOptions curve;
+  EstimatorOptions measurement;  // the virtual instrument's own estimator
+};
+struct DesignRun {
+  std::vector<std::size_t> chosen;  // candidate indices in measuring order
+  double seconds = 0;               // instrument time by the timing model
+  DesignStatus status;
+  double choice_seconds_max = 0;    // wall time of the slowest update + next
+};
+struct DesignStudy {
+  DesignRun uniform, adaptive;
+  // Curve mode: the interpolated adaptive curve against the uniform (dense) measurement and
+  // against the noise-free truth: max relative error over candidates and channels.
+  std::optional<double> error_vs_dense, error_vs_truth;
+  nlohmann::json to_json(const std::vector<Geometry>& candidates) const;
+};
+// `model` empty: curve mode. Throws Error naming the field for bad input.
+DesignStudy study_design(const std::string& model, const std::vector<Geometry>& candidates,
+                         const WavelengthGrid& grid, const InstrumentProfile& profile,
+                         const DesignStudyOptions& options);
+
+}  // namespace gonio::twin

@@ -1,0 +1,240 @@
+// CurveDesign — refine the measured curves where interpolation is least certain.
+//
+// Along each curve (the candidates that share an incidence and azimuths, by receiving
+// angle) the delivered curve is the linear interpolant of the measured points. Its error at
+// an unmeasured candidate is estimated by how far it lies from the cubic through the two
+// measured neighbours on each side (a quadratic at the ends): the classic a-posteriori
+// estimate of adaptive quadrature and curve sampling, the difference between interpolants
+// of two orders standing in for the lower one's error (de Boor, A Practical Guide to
+// Splines, 2001, ch. II–IV). The readings' own noise is no interpolation error: the part of
+// the gap within k·u of the interpolated uncertainty is not counted.
+//
+// The estimate sees only what the measured points hint at: a feature narrower than the seed
+// spacing between two seeds would be missed, which is why the specular and the
+// retro-reflection directions, where a sample's narrow peaks are, are always seeds.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <tuple>
+
+#include "gonio/proto/error.hpp"
+#include "gonio/twin/design.hpp"
+
+namespace gonio::twin {
+
+namespace {
+
+constexpr double kUnknown = 1e300;
+
+long key(double v) { return std::lround(v * 1e6); }
+
+// Lagrange interpolation through (xs, ys) at x.
+double lagrange(const std::vector<double>& xs, const std::vector<double>& ys, double x) {
+  double sum = 0;
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    double w = 1;
+    for (std::size_t j = 0; j < xs.size(); ++j)
+      if (j != i) w *= (x - xs[j]) / (xs[i] - xs[j]);
+    sum += w * ys[i];
+  }
+  return sum;
+}
+
+}  // namespace
+
+void CurveDesignOptions::validate() const {
+  if (!(tolerance > 0 && tolerance <= 1)) throw Error::out_of_range("tolerance", tolerance, 0, 1);
+  timing.validate();
+  if (!(seed_spacing_deg >= 0.1 && seed_spacing_deg <= 180))
+    throw Error::out_of_range("seed_spacing_deg", seed_spacing_deg, 0.1, 180, "°");
+  if (!(coverage_k >= 0 && coverage_k <= 10)) throw Error::out_of_range("coverage_k", coverage_k, 0, 10);
+}
+
+CurveDesign::CurveDesign(std::vector<Geometry> candidates, CurveDesignOptions options)
+    : Design(std::move(candidates), 1), options_(std::move(options)) {
+  options_.validate();
+  std::map<std::tuple<long, long, long>, std::size_t> index;
+  for (std::size_t c = 0; c < candidates_.size(); ++c) {
+    const auto& g = candidates_[c];
+    const auto k = std::make_tuple(key(g.theta_i), key(g.phi_i), key(g.phi_r));
+    const auto [it, fresh] = index.emplace(k, curves_.size());
+    if (fresh) curves_.emplace_back();
+    curves_[it->second].members.push_back(c);
+  }
+  curve_of_.assign(candidates_.size(), 0);
+  position_.assign(candidates_.size(), 0);
+  for (std::size_t k = 0; k < curves_.size(); ++k) {
+    auto& m = curves_[k].members;
+    std::stable_sort(m.begin(), m.end(), [&](std::size_t a, std::size_t b) {
+      return candidates_[a].theta_r < candidates_[b].theta_r;
+    });
+    for (std::size_t i = 0; i < m.size(); ++i) {
+      curve_of_[m[i]] = k;
+      position_[m[i]] = i;
+    }
+  }
+  points_.resize(candidates_.size());
+  error_.assign(candidates_.size(), kUnknown);
+}
+
+std::vector<std::size_t> CurveDesign::seeds() const {
+  std::vector<std::size_t> out;
+  bool forward = true;
+  for (const auto& curve : curves_) {
+    const auto& m = curve.members;
+    std::vector<bool> pick(m.size(), false);
+    pick.front() = pick.back() = true;
+    // The specular and retro-reflection directions: the nearest candidate to each.
+    const double ti = candidates_[m.front()].theta_i;
+    for (const double target : {ti, -ti}) {
+      std::size_t best = 0;
+      for (std::size_t i = 1; i < m.size(); ++i)
+        if (std::abs(candidates_[m[i]].theta_r - target) < std::abs(candidates_[m[best]].theta_r - target)) best = i;
+      if (std::abs(candidates_[m[best]].theta_r - target) <= options_.seed_spacing_deg / 2) pick[best] = true;
+    }
+    // Then no gap wider than the seed spacing: the farthest member still within it.
+    std::size_t last = 0;
+    for (std::size_t i = 1; i < m.size(); ++i) {
+      if (pick[i]) {
+        last = i;
+        continue;
+      }
+      const bool next_too_far = i + 1 < m.size() &&
+                                candidates_[m[i + 1]].theta_r - candidates_[m[last]].theta_r > options_.seed_spacing_deg + 1e-9;
+      if (next_too_far) {
+        pick[i] = true;
+        last = i;
+      }
+    }
+    // Boustrophedon: each curve swept from the end the arm is nearer.
+    std::vector<std::size_t> mine;
+    for (std::size_t i = 0; i < m.size(); ++i)
+      if (pick[i]) mine.push_back(m[i]);
+    if (!forward) std::reverse(mine.begin(), mine.end());
+    forward = !forward;
+    out.insert(out.end(), mine.begin(), mine.end());
+  }
+  return out;
+}
+
+void CurveDesign::add(std::size_t c, const MeasuredPoint& p) {
+  if (p.beta.empty() || p.beta.size() != p.u.size())
+    throw Error::invalid("point", "needs β and u on the same channels");
+  for (const auto& q : points_)
+    if (!q.beta.empty() && q.beta.size() != p.beta.size())
+      throw Error::invalid("point", "has another number of channels than the points before");
+  mark(c);
+  points_[c] = p;
+  points_[c].geometry = candidates_[c];
+}
+
+std::vector<double> CurveDesign::interpolate(std::size_t c) const {
+  if (!points_[c].beta.empty()) return points_[c].beta;
+  const auto& m = curves_[curve_of_[c]].members;
+  const auto i = position_[c];
+  std::optional<std::size_t> left, right;
+  for (std::size_t k = i; k-- > 0;)
+    if (!points_[m[k]].beta.empty()) { left = m[k]; break; }
+  for (std::size_t k = i + 1; k < m.size(); ++k)
+    if (!points_[m[k]].beta.empty()) { right = m[k]; break; }
+  if (!left || !right) return {};
+  const double x0 = candidates_[*left].theta_r, x1 = candidates_[*right].theta_r, x = candidates_[c].theta_r;
+  const double t = x1 - x0 > 1e-12 ? (x - x0) / (x1 - x0) : 0.5;
+  std::vector<double> out(points_[*left].beta.size());
+  for (std::size_t k = 0; k < out.size(); ++k)
+    out[k] = (1 - t) * points_[*left].beta[k] + t * points_[*right].beta[k];
+  return out;
+}
+
+void CurveDesign::update() {
+  max_error_ = 0;
+  for (const auto& curve : curves_) {
+    const auto& m = curve.members;
+    std::vector<std::size_t> known;  // positions of measured members
+    for (std::size_t i = 0; i < m.size(); ++i)
+      if (!points_[m[i]].beta.empty()) known.push_back(i);
+    for (std::size_t i = 0; i < m.size(); ++i) {
+      const auto c = m[i];
+      if (!points_[c].beta.empty()) {
+        error_[c] = 0;
+        continue;
+      }
+      // Its measured neighbours: k is the first known position beyond i.
+      const auto k = static_cast<std::size_t>(std::upper_bound(known.begin(), known.end(), i) - known.begin());
+      if (k == 0 || k == known.size() || known.size() < 3) {
+        error_[c] = kUnknown;  // outside the measured range, or nothing to compare with
+        max_error_ = kUnknown;
+        continue;
+      }
+      // Two on each side where there are, else three in all.
+      std::vector<std::size_t> nodes;
+      for (std::size_t j = k >= 2 ? k - 2 : 0; j < std::min(known.size(), k + 2); ++j) nodes.push_back(known[j]);
+      const auto& a = points_[m[known[k - 1]]];
+      const auto& b = points_[m[known[k]]];
+      const double xa = candidates_[m[known[k - 1]]].theta_r, xb = candidates_[m[known[k]]].theta_r;
+      const double x = candidates_[c].theta_r;
+      const double t = xb - xa > 1e-12 ? (x - xa) / (xb - xa) : 0.5;
+      std::vector<double> xs;
+      for (const auto j : nodes) xs.push_back(candidates_[m[j]].theta_r);
+      double e = 0;
+      for (std::size_t ch = 0; ch < a.beta.size(); ++ch) {
+        std::vector<double> ys;
+        for (const auto j : nodes) ys.push_back(points_[m[j]].beta[ch]);
+        const double linear = (1 - t) * a.beta[ch] + t * b.beta[ch];
+        const double u = (1 - t) * a.u[ch] + t * b.u[ch];
+        const double gap = std::max(0.0, std::abs(lagrange(xs, ys, x) - linear) - options_.coverage_k * u);
+        const double scale = std::max(std::abs(linear), 1e-12);
+        e = std::max(e, gap / scale);
+      }
+      error_[c] = e;
+      max_error_ = std::max(max_error_, e);
+    }
+  }
+}
+
+std::optional<std::size_t> CurveDesign::next(const std::vector<std::size_t>& pending, const Geometry& arms) const {
+  // In every gap between filled (measured or pending) members, the member with the largest
+  // estimated error, if it is above the tolerance; of these, the nearest in instrument time.
+  const auto filled = [&](std::size_t c) {
+    return !points_[c].beta.empty() || std::find(pending.begin(), pending.end(), c) != pending.end();
+  };
+  std::optional<std::size_t> best;
+  double best_s = 1e300;
+  for (const auto& curve : curves_) {
+    const auto& m = curve.members;
+    std::vector<std::size_t> gap;
+    const auto close_gap = [&] {
+      if (gap.empty()) return;
+      // The largest estimate; among equal ones (unknown), the middle of the gap.
+      std::size_t worst = gap[gap.size() / 2];
+      for (const auto c : gap)
+        if (error_[c] > error_[worst] * (1 + 1e-9)) worst = c;
+      gap.clear();
+      if (error_[worst] <= options_.tolerance) return;
+      const double s = options_.timing.point_s(arms, candidates_[worst]);
+      if (s < best_s) {
+        best_s = s;
+        best = worst;
+      }
+    };
+    for (const auto c : m) {
+      if (filled(c)) close_gap();
+      else gap.push_back(c);
+    }
+    close_gap();
+  }
+  return best;
+}
+
+bool CurveDesign::target_reached() const { return max_error_ <= options_.tolerance; }
+
+DesignStatus CurveDesign::status() const {
+  DesignStatus s;
+  s.mode = "curve";
+  s.state = target_reached() ? DesignState::target_reached : DesignState::running;
+  s.points_used = measured_.size();
+  if (max_error_ < kUnknown) s.estimated_error = max_error_;
+  return s;
+}
+
+}  // namespace gonio::twin
