@@ -39,6 +39,22 @@ bool is_device_error(Errc c) {
   }
 }
 
+std::string plan_model(const ScanPlan& plan) {
+  return plan.adaptive && plan.adaptive->mode == AdaptiveMode::parameters ? plan.adaptive->model : "";
+}
+
+// The reason a completed adaptive scan carries: why it stopped, and a misfit said plainly.
+std::string adaptive_summary(const twin::DesignStatus& st, const ScanPlan& plan) {
+  std::string s = st.state == twin::DesignState::target_reached
+                      ? fmt::format("adaptive: target reached in {} points", st.points_used)
+                  : st.state == twin::DesignState::max_points
+                      ? fmt::format("adaptive: stopped at max_points ({}) before the target", plan.adaptive->max_points)
+                      : fmt::format("adaptive: no candidate left to measure after {} points", st.points_used);
+  if (st.misfit)
+    s += fmt::format("; the model does not describe the data (χ²/dof = {:.3g})", st.chi2_per_dof.value_or(0));
+  return s;
+}
+
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
@@ -52,9 +68,14 @@ void Instrument::start_run(const Scan& scan) {
   const auto sample = store_.sample(scan.plan.sample_id);
   r->tolerance = sample ? sample->spec.tolerance : 0;
   r->evidence = ScanEvidence(r->tolerance, divergence_.coverage_k);
-  // A resumed scan's verdict weighs the points stored before, as if it had never stopped.
+  // A resumed scan's verdict weighs the points stored before, as if it had never stopped;
+  // an adaptive scan's loop resumes from them.
+  std::vector<PointRecord> stored;
   for (std::size_t first = 0; first < r->next; first += 1000)
-    for (const auto& p : store_.points(scan.id, first, 1000)) r->evidence.add(p);
+    for (auto& p : store_.points(scan.id, first, 1000)) {
+      r->evidence.add(p);
+      if (scan.plan.adaptive) stored.push_back(std::move(p));
+    }
   if (const auto last = store_.latest_fit(scan.id, "verdict")) {
     const auto& v = last->result;
     r->verdict_stored = v.value("decision", "") + "|" + (v.contains("cause") && v["cause"].is_object() ? v["cause"].value("parameter", "") : "");
@@ -74,11 +95,24 @@ void Instrument::start_run(const Scan& scan) {
       auto tw = std::make_shared<const ScanTwin>(
           twin_.make(r->spec, grid, "sample.bsdf", snap.profile), r->spec,
           [&](const std::string& spec) { return twin_.make(spec, grid, "sample.bsdf", snap.profile); });
-      if (r->next < scan.points_total)
+      if (scan.plan.adaptive) r->scan_twin = std::move(tw);  // a batch per chosen point
+      else if (r->next < scan.points_total)
         r->batch = twin_.batch(std::move(tw), scan.plan.geometries, scan.plan.geometry_index(r->next));
     } catch (const Error& e) {
       r->prediction_note = fmt::format("no predictions: {}", e.what());
       spdlog::warn("scan {}: {}", scan.id, r->prediction_note);
+    }
+  }
+  std::string adaptive_failure;
+  if (scan.plan.adaptive) {
+    try {
+      r->adaptive = std::make_unique<AdaptiveLoop>(
+          scan.plan, snap.profile,
+          [this](const Geometry& a, const Geometry& b) { return arms_can_move(guard_, a, b); });
+      r->adaptive->restore(stored);
+      r->candidate = r->adaptive->first();
+    } catch (const Error& e) {
+      adaptive_failure = fmt::format("the adaptive loop cannot run: {}", e.what());
     }
   }
   r->colorimeter = colorimeter_for(scan.plan.wavelengths);
@@ -89,6 +123,7 @@ void Instrument::start_run(const Scan& scan) {
   const auto note = r->prediction_note;
   {
     std::lock_guard lock(mu_);
+    adaptive_status_ = r->adaptive ? r->adaptive->status().to_json() : json(nullptr);
     run_ = std::move(r);
     running_ = scan.id;
     control_ = Control::none;
@@ -113,8 +148,11 @@ void Instrument::start_run(const Scan& scan) {
                note.empty() ? "" : "; " + note);
   set_state("scanning", fmt::format("scan {}", scan.id));
   if (status_listener_) status_listener_(fmt::format("scan {} running", scan.id));
-  // A scan whose every point is stored (crash after the last commit) completes at once.
-  if (run_->next >= scan.points_total) finish_run(ScanState::completed, "", "goniod");
+  // A scan whose every point is stored (crash after the last commit) completes at once; so
+  // does an adaptive one whose loop has reached its target or has nothing left to choose.
+  if (!adaptive_failure.empty()) finish_run(ScanState::failed, adaptive_failure, "goniod");
+  else if (run_->next >= scan.points_total) finish_adaptive_or_complete(true);
+  else if (run_->adaptive && !run_->candidate) finish_adaptive_or_complete(false);
 }
 
 void Instrument::finish_run(ScanState state, const std::string& reason, const std::string& actor) {
@@ -126,6 +164,18 @@ void Instrument::finish_run(ScanState state, const std::string& reason, const st
   }
   if (!r) return;
   if (r->batch) r->batch->cancel();
+  if (r->adaptive && state != ScanState::completed) {
+    // Paused, interrupted, failed or cancelled: scan.get shows the loop as it stopped.
+    try {
+      store_.insert_fit(r->scan.id, "adaptive", plan_model(r->scan.plan), r->adaptive->status().to_json(), actor);
+    } catch (const Error& e) {
+      spdlog::warn("scan {}: cannot store the adaptive loop's state: {}", r->scan.id, e.what());
+    }
+  }
+  {
+    std::lock_guard lock(mu_);
+    adaptive_status_ = json(nullptr);
+  }
   std::optional<Scan> sc;
   try {
     sc = transition(r->scan.id, state, reason, actor);
@@ -325,8 +375,15 @@ void Instrument::step() {
   Run& r = *run_;
   const ScanPlan& plan = r.scan.plan;
   const std::size_t idx = r.next;
-  const std::size_t gi = plan.geometry_index(idx);
+  const std::size_t gi = r.adaptive ? *r.candidate : plan.geometry_index(idx);
   const Geometry& g = plan.geometries[gi];
+  if (r.adaptive && !r.choosing) {
+    // The loop chooses the point after this one while the arms serve this one, and the
+    // twin predicts this one meanwhile.
+    r.adaptive->measuring(gi);
+    r.choosing = true;
+    if (r.scan_twin) r.batch = twin_.batch(r.scan_twin, {g}, 0);
+  }
   const auto t_start = Clock::now();
   double device_s = 0, twin_s = 0;
   const auto timed = [&](auto&& f) {
@@ -340,7 +397,7 @@ void Instrument::step() {
   p.scan_id = r.scan.id;
   p.index = static_cast<std::int64_t>(idx);
   p.geometry_index = static_cast<std::int64_t>(gi);
-  p.repeat = static_cast<int>(idx % static_cast<std::size_t>(plan.repeats));
+  p.repeat = r.adaptive ? r.adaptive->readings(gi) - 1 : static_cast<int>(idx % static_cast<std::size_t>(plan.repeats));
   p.planned = g;
   p.started_at = utc::now();
   drivers::Reading dark, sample;
@@ -489,7 +546,7 @@ void Instrument::step() {
     beat();
     const auto t0 = Clock::now();
     try {
-      auto pp = r.batch->wait(gi);
+      auto pp = r.batch->wait(r.adaptive ? 0 : gi);
       p.predicted = pp.prediction.spectrum();
       p.twin_version = r.twin_version;
       p.u_model = pp.budget.u_model;
@@ -561,12 +618,39 @@ void Instrument::step() {
     judge_scan(p.index, false);
   }
   if (p.diverged) ++r.scan.points_diverged;
+  if (r.adaptive) {
+    r.adaptive->committed(gi, p);
+    r.choosing = false;
+    if (r.next < r.scan.points_total) r.candidate = r.adaptive->next_after(gi);
+    std::lock_guard lock(mu_);
+    adaptive_status_ = r.adaptive->status().to_json();
+  }
   publish_progress();
-  if (r.next >= r.scan.points_total) {
+  if (r.next >= r.scan.points_total || (r.adaptive && !r.candidate)) {
     judge_scan(p.index, true);
     std::lock_guard sched(sched_mu_);
-    finish_run(ScanState::completed, "", "goniod");
+    finish_adaptive_or_complete(r.next >= r.scan.points_total);
   }
+}
+
+void Instrument::finish_adaptive_or_complete(bool at_max_points) {
+  Run& r = *run_;
+  std::string reason;
+  if (r.adaptive) {
+    const auto st = r.adaptive->finish(at_max_points);
+    auto j = st.to_json();
+    {
+      std::lock_guard lock(mu_);
+      adaptive_status_ = j;
+    }
+    try {
+      store_.insert_fit(r.scan.id, "adaptive", plan_model(r.scan.plan), j, "goniod");
+    } catch (const Error& e) {
+      spdlog::warn("scan {}: cannot store the adaptive loop's state: {}", r.scan.id, e.what());
+    }
+    reason = adaptive_summary(st, r.scan.plan);
+  }
+  finish_run(ScanState::completed, reason, "goniod");
 }
 
 void Instrument::judge_scan(std::int64_t point_index, bool final) {
@@ -619,8 +703,20 @@ void Instrument::publish_progress() {
                     {"points_done", r.next},
                     {"points_total", r.scan.points_total},
                     {"points_diverged", r.scan.points_diverged},
-                    {"eta_s", per_point * static_cast<double>(remaining)}},
+                    {"eta_s", per_point * static_cast<double>(remaining)},
+                    {"adaptive", r.adaptive ? adaptive_json() : json(nullptr)}},
                r.scan.id);
+}
+
+json Instrument::adaptive_json() const {
+  std::lock_guard lock(mu_);
+  return adaptive_status_;
+}
+
+std::optional<json> Instrument::adaptive_status(std::int64_t scan) const {
+  std::lock_guard lock(mu_);
+  if (!running_ || *running_ != scan || adaptive_status_.is_null()) return std::nullopt;
+  return adaptive_status_;
 }
 
 }  // namespace gonio::daemon

@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "gonio/daemon/adaptive_loop.hpp"
 #include "gonio/daemon/divergence.hpp"
 #include "gonio/daemon/instrument.hpp"
 #include "gonio/daemon/point_reduction.hpp"
@@ -26,6 +27,12 @@ struct Instrument::Run {
   double tolerance = 0;
   std::optional<std::int64_t> sample_id;
   std::shared_ptr<TwinService::Batch> batch;
+  std::shared_ptr<const ScanTwin> scan_twin;  // kept for an adaptive scan's per-point batches
+  // An adaptive scan: its loop, the candidate of the next point, and whether the loop has
+  // started choosing the one after it (a point measured again after a fault does not).
+  std::unique_ptr<AdaptiveLoop> adaptive;
+  std::optional<std::size_t> candidate;
+  bool choosing = false;
   std::shared_ptr<const twin::Colorimeter> colorimeter;
   std::string prediction_note;  // why there are no predictions
   std::string twin_version;     // of the profile the run started with

@@ -38,6 +38,10 @@ bool reachable(const MotionGuard& guard, const Geometry& a, const Geometry& b,
 
 }  // namespace
 
+bool arms_can_move(const drivers::MotionGuard& guard, const Geometry& a, const Geometry& b) {
+  return reachable(guard, a, b, true) || reachable(guard, a, b, false);
+}
+
 void check_plan(const ScanPlan& plan, const MotionGuard& guard, const DeviceFacts& devices) {
   const bool know_axes = !devices.axes.empty();
   const bool has_rotation = std::ranges::find(devices.axes, Axis::rotation) != devices.axes.end();
@@ -61,7 +65,7 @@ void check_plan(const ScanPlan& plan, const MotionGuard& guard, const DeviceFact
       throw reject(k, g, fmt::format("the arms would be {:g}° apart, inside the collision zone "
                                      "(minimum separation {:g}°)",
                                      s, sep));
-    if (k > 0) {
+    if (k > 0 && !plan.adaptive) {
       const auto& prev = plan.geometries[k - 1];
       if (!reachable(guard, prev, g, true) && !reachable(guard, prev, g, false))
         throw reject(k, g, fmt::format("the arms cannot move here from {} without entering the "

@@ -57,6 +57,20 @@ void scan_human(const json& s) {
   std::cout << fmt::format("  submitted {} by {}  started {}  finished {}\n", cell(s["submitted_at"]),
                            cell(s["submitted_by"]), cell(s["started_at"]), cell(s["finished_at"]));
   if (!s["predicted"].get<bool>()) std::cout << "  no predictions: the sample has no reference BSDF\n";
+  if (s.contains("adaptive") && s["adaptive"].is_object()) {
+    const auto& a = s["adaptive"];
+    std::cout << fmt::format("  adaptive {}: {}, {} points used", cell(a["mode"]), cell(a["state"]),
+                             cell(a["points_used"]));
+    if (a.contains("estimated_error") && !a["estimated_error"].is_null())
+      std::cout << fmt::format(", estimated error {:.2f} %", 100 * a["estimated_error"].get<double>());
+    std::cout << "\n";
+    for (const auto& p : a.value("parameters", json::array())) {
+      const double v = p["value"].get<double>(), u = p["u"].get<double>();
+      std::cout << fmt::format("    {} = {:.6g} ± {:.2g} ({:.2f} %)\n", cell(p["name"]), v, u,
+                               100 * u / std::max(std::abs(v), 1e-300));
+    }
+    for (const auto& w : a.value("warnings", json::array())) std::cout << "    warning: " << cell(w) << "\n";
+  }
   if (s.contains("note")) std::cout << "  " << cell(s["note"]) << "\n";
 }
 
@@ -72,6 +86,9 @@ struct ScanArgs {
   std::string format = "csv", output;
   std::string model;
   std::uint64_t samples = 0;
+  std::string adaptive;  // scan submit: "parameters" or "curve"
+  double target_rel_u = 0.05, tolerance = 0.01;
+  int max_points = 50;
 };
 
 }  // namespace
@@ -127,6 +144,15 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
   submit->add_option("--priority", a->priority, "-100..100, higher runs first");
   submit->add_option("--not-before", a->not_before, "UTC time, e.g. 2025-01-31T18:00:00Z");
   submit->add_option("--name", a->name);
+  submit->add_option("--adaptive", a->adaptive,
+                     "the grids are candidates and the twin chooses among them: parameters or curve")
+      ->check(CLI::IsMember({"parameters", "curve"}));
+  submit->add_option("--model", a->model, "--adaptive parameters: BSDF spec with '?' marks");
+  submit->add_option("--target-rel-u", a->target_rel_u, "--adaptive parameters: stop at this relative u")
+      ->capture_default_str();
+  submit->add_option("--tolerance", a->tolerance, "--adaptive curve: stop at this relative error")
+      ->capture_default_str();
+  submit->add_option("--max-points", a->max_points, "--adaptive: at most this many points")->capture_default_str();
   submit->add_flag("--watch", a->watch, "follow the scan until it ends");
   submit->callback([&ctx, a] {
     ctx.action = [a](Session& s) {
@@ -139,6 +165,16 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
       if (!a->geometries.empty()) p["geometries"] = a->geometries;
       if (!a->grids.empty()) p["grids"] = a->grids;
       if (!a->not_before.empty()) p["not_before"] = a->not_before;
+      if (!a->adaptive.empty()) {
+        json ad{{"mode", a->adaptive}, {"max_points", a->max_points}};
+        if (a->adaptive == "parameters") {
+          ad["model"] = a->model;
+          ad["target_rel_u"] = a->target_rel_u;
+        } else {
+          ad["tolerance"] = a->tolerance;
+        }
+        p["adaptive"] = std::move(ad);
+      }
       const auto r = s.call("scan.submit", p);
       print(s.options(), r, [&] { scan_human(r); });
       if (a->watch) return watch_scan(s, r["id"].get<std::int64_t>(), s.options().json);

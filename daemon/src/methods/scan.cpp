@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "gonio/daemon/adaptive_loop.hpp"
 #include "gonio/daemon/export.hpp"
 #include "methods/inverse.hpp"
 #include "methods/params.hpp"
@@ -58,6 +59,7 @@ void register_scan(MethodRegistrar& reg, Services& s) {
     plan.sample_id = sample.id;
     plan.sample_name.clear();
     s.instrument.validate_plan(plan);
+    AdaptiveLoop::check(plan);
     bool predicted = sample.spec.bsdf.has_value();
     if (predicted) (void)s.twin.make(*sample.spec.bsdf, plan.wavelengths, "sample.bsdf");
     const auto scan = s.store.insert_scan(plan, predicted, actor(c));
@@ -82,6 +84,12 @@ void register_scan(MethodRegistrar& reg, Services& s) {
     out["fits"] = std::move(fits);
     const auto verdict = s.store.latest_fit(id, "verdict");
     out["verdict"] = verdict ? verdict->result : json(nullptr);
+    // An adaptive scan's loop: live while it runs, else as stored when it last stopped.
+    if (out["plan"].contains("adaptive")) {
+      if (auto live = s.instrument.adaptive_status(id)) out["adaptive"] = std::move(*live);
+      else if (const auto last = s.store.latest_fit(id, "adaptive")) out["adaptive"] = last->result;
+      else out["adaptive"] = json(nullptr);
+    }
     return out;
   });
 

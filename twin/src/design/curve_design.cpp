@@ -1,12 +1,16 @@
 // CurveDesign — refine the measured curves where interpolation is least certain.
 //
 // Along each curve (the candidates that share an incidence and azimuths, by receiving
-// angle) the delivered curve is the linear interpolant of the measured points. Its error at
-// an unmeasured candidate is estimated by how far it lies from the cubic through the two
-// measured neighbours on each side (a quadratic at the ends): the classic a-posteriori
-// estimate of adaptive quadrature and curve sampling, the difference between interpolants
-// of two orders standing in for the lower one's error (de Boor, A Practical Guide to
-// Splines, 2001, ch. II–IV). The readings' own noise is no interpolation error: the part of
+// angle) the delivered curve is the local cubic through the two measured neighbours on each
+// side (fewer near an end), in log β (in β where a value is not positive): a lobe's flanks
+// and tails are close to exponential, so far fewer points carry them to a relative
+// tolerance. Its error at an unmeasured candidate is estimated by how far it lies from the
+// quintic through one more neighbour on each side and from the cubics on the stencils
+// shifted by one to either side, whichever differs most: the classic a-posteriori estimate
+// of adaptive quadrature and curve sampling, the difference between interpolants standing
+// in for the delivered one's error (de Boor, A Practical Guide to Splines, 2001, ch. II–IV),
+// with the shifted stencils guarding against two interpolants agreeing by chance where the
+// curve turns (a lobe meeting its diffuse floor). The readings' own noise is no interpolation error: the part of
 // the gap within k·u of the interpolated uncertainty is not counted.
 //
 // The estimate sees only what the measured points hint at: a feature narrower than the seed
@@ -48,6 +52,7 @@ void CurveDesignOptions::validate() const {
   if (!(seed_spacing_deg >= 0.1 && seed_spacing_deg <= 180))
     throw Error::out_of_range("seed_spacing_deg", seed_spacing_deg, 0.1, 180, "°");
   if (!(coverage_k >= 0 && coverage_k <= 10)) throw Error::out_of_range("coverage_k", coverage_k, 0, 10);
+  if (!(safety >= 1 && safety <= 10)) throw Error::out_of_range("safety", safety, 1, 10);
 }
 
 CurveDesign::CurveDesign(std::vector<Geometry> candidates, CurveDesignOptions options)
@@ -128,67 +133,87 @@ void CurveDesign::add(std::size_t c, const MeasuredPoint& p) {
   points_[c].geometry = candidates_[c];
 }
 
-std::vector<double> CurveDesign::interpolate(std::size_t c) const {
-  if (!points_[c].beta.empty()) return points_[c].beta;
+std::optional<CurveDesign::Estimate> CurveDesign::estimate(std::size_t c) const {
   const auto& m = curves_[curve_of_[c]].members;
   const auto i = position_[c];
-  std::optional<std::size_t> left, right;
-  for (std::size_t k = i; k-- > 0;)
-    if (!points_[m[k]].beta.empty()) { left = m[k]; break; }
-  for (std::size_t k = i + 1; k < m.size(); ++k)
-    if (!points_[m[k]].beta.empty()) { right = m[k]; break; }
-  if (!left || !right) return {};
-  const double x0 = candidates_[*left].theta_r, x1 = candidates_[*right].theta_r, x = candidates_[c].theta_r;
-  const double t = x1 - x0 > 1e-12 ? (x - x0) / (x1 - x0) : 0.5;
-  std::vector<double> out(points_[*left].beta.size());
-  for (std::size_t k = 0; k < out.size(); ++k)
-    out[k] = (1 - t) * points_[*left].beta[k] + t * points_[*right].beta[k];
+  std::vector<std::size_t> known;  // positions of the measured members
+  for (std::size_t j = 0; j < m.size(); ++j)
+    if (!points_[m[j]].beta.empty()) known.push_back(j);
+  const auto k = static_cast<std::size_t>(std::upper_bound(known.begin(), known.end(), i) - known.begin());
+  if (k == 0 || k == known.size()) return std::nullopt;  // outside the measured range
+  // Delivered: through two measured neighbours on each side (fewer near an end); its error:
+  // against the interpolant through one more on each side.
+  const auto span = [&](std::size_t w) {
+    std::vector<std::size_t> nodes;
+    for (std::size_t j = k >= w ? k - w : 0; j < std::min(known.size(), k + w); ++j) nodes.push_back(m[known[j]]);
+    return nodes;
+  };
+  const auto inner = span(2), outer = span(3);
+  // The same order on shifted stencils (three before and one after, one before and three
+  // after): where the curve changes character inside a gap, stencils of one order disagree
+  // even when two orders happen to agree.
+  const auto shifted = [&](std::size_t before, std::size_t after) {
+    std::vector<std::size_t> nodes;
+    if (k < before || k + after > known.size()) return nodes;
+    for (std::size_t j = k - before; j < k + after; ++j) nodes.push_back(m[known[j]]);
+    return nodes;
+  };
+  const auto left = shifted(3, 1), right = shifted(1, 3);
+  const double x = candidates_[c].theta_r;
+  const auto& a = points_[m[known[k - 1]]];
+  const auto& b = points_[m[known[k]]];
+  const double xa = candidates_[m[known[k - 1]]].theta_r, xb = candidates_[m[known[k]]].theta_r;
+  const double t = xb - xa > 1e-12 ? (x - xa) / (xb - xa) : 0.5;
+  Estimate out;
+  out.error = outer.size() > inner.size() ? 0 : kUnknown;
+  for (std::size_t ch = 0; ch < a.beta.size(); ++ch) {
+    bool positive = true;
+    for (const auto n : outer) positive = positive && points_[n].beta[ch] > 0;
+    // In logarithms where the values allow: relative errors directly, u/β as the noise.
+    const auto y = [&](std::size_t n) {
+      return positive ? std::log(points_[n].beta[ch]) : points_[n].beta[ch];
+    };
+    const auto through = [&](const std::vector<std::size_t>& nodes) {
+      std::vector<double> xs, ys;
+      for (const auto n : nodes) {
+        xs.push_back(candidates_[n].theta_r);
+        ys.push_back(y(n));
+      }
+      return lagrange(xs, ys, x);
+    };
+    const double delivered = through(inner);
+    const double u = positive ? (1 - t) * a.u[ch] / a.beta[ch] + t * b.u[ch] / b.beta[ch]
+                              : (1 - t) * a.u[ch] + t * b.u[ch];
+    out.value.push_back(positive ? std::exp(delivered) : delivered);
+    if (out.error >= kUnknown) continue;
+    double spread = std::abs(through(outer) - delivered);
+    if (inner.size() == 4) {
+      if (!left.empty()) spread = std::max(spread, std::abs(through(left) - delivered));
+      if (!right.empty()) spread = std::max(spread, std::abs(through(right) - delivered));
+    }
+    double gap = std::max(0.0, options_.safety * spread - options_.coverage_k * u);
+    if (!positive) gap /= std::max(std::abs(delivered), 1e-12);
+    out.error = std::max(out.error, gap);
+  }
   return out;
+}
+
+std::vector<double> CurveDesign::interpolate(std::size_t c) const {
+  if (!points_[c].beta.empty()) return points_[c].beta;
+  const auto e = estimate(c);
+  return e ? e->value : std::vector<double>{};
 }
 
 void CurveDesign::update() {
   max_error_ = 0;
-  for (const auto& curve : curves_) {
-    const auto& m = curve.members;
-    std::vector<std::size_t> known;  // positions of measured members
-    for (std::size_t i = 0; i < m.size(); ++i)
-      if (!points_[m[i]].beta.empty()) known.push_back(i);
-    for (std::size_t i = 0; i < m.size(); ++i) {
-      const auto c = m[i];
-      if (!points_[c].beta.empty()) {
-        error_[c] = 0;
-        continue;
-      }
-      // Its measured neighbours: k is the first known position beyond i.
-      const auto k = static_cast<std::size_t>(std::upper_bound(known.begin(), known.end(), i) - known.begin());
-      if (k == 0 || k == known.size() || known.size() < 3) {
-        error_[c] = kUnknown;  // outside the measured range, or nothing to compare with
-        max_error_ = kUnknown;
-        continue;
-      }
-      // Two on each side where there are, else three in all.
-      std::vector<std::size_t> nodes;
-      for (std::size_t j = k >= 2 ? k - 2 : 0; j < std::min(known.size(), k + 2); ++j) nodes.push_back(known[j]);
-      const auto& a = points_[m[known[k - 1]]];
-      const auto& b = points_[m[known[k]]];
-      const double xa = candidates_[m[known[k - 1]]].theta_r, xb = candidates_[m[known[k]]].theta_r;
-      const double x = candidates_[c].theta_r;
-      const double t = xb - xa > 1e-12 ? (x - xa) / (xb - xa) : 0.5;
-      std::vector<double> xs;
-      for (const auto j : nodes) xs.push_back(candidates_[m[j]].theta_r);
-      double e = 0;
-      for (std::size_t ch = 0; ch < a.beta.size(); ++ch) {
-        std::vector<double> ys;
-        for (const auto j : nodes) ys.push_back(points_[m[j]].beta[ch]);
-        const double linear = (1 - t) * a.beta[ch] + t * b.beta[ch];
-        const double u = (1 - t) * a.u[ch] + t * b.u[ch];
-        const double gap = std::max(0.0, std::abs(lagrange(xs, ys, x) - linear) - options_.coverage_k * u);
-        const double scale = std::max(std::abs(linear), 1e-12);
-        e = std::max(e, gap / scale);
-      }
-      error_[c] = e;
-      max_error_ = std::max(max_error_, e);
+  for (std::size_t c = 0; c < candidates_.size(); ++c) {
+    if (!points_[c].beta.empty()) {
+      error_[c] = 0;
+      continue;
     }
+    const auto e = estimate(c);
+    error_[c] = e ? e->error : kUnknown;
+    max_error_ = std::max(max_error_, error_[c]);
   }
 }
 

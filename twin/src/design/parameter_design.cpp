@@ -186,15 +186,15 @@ std::optional<std::size_t> ParameterDesign::next(const std::vector<std::size_t>&
 }
 
 std::vector<std::size_t> ParameterDesign::seeds() const {
-  // The greedy design at the prior's start: as many points as parameters, plus two.
-  const std::size_t n = std::min(candidates_.size(), x_.size() + 2);
+  // Spread over the candidates in their order (a sweep): a D-optimal start from the prior
+  // would put every seed where the prior's model is most sensitive, and a model that is
+  // exact there could look determined before the data could show that it misfits.
+  const std::size_t N = candidates_.size();
+  const std::size_t n = std::min(N, std::max<std::size_t>(5, 2 * x_.size() + 3));
   std::vector<std::size_t> chosen;
-  Geometry arms = candidates_.front();
-  while (chosen.size() < n) {
-    const auto c = next(chosen, arms);
-    if (!c) break;
-    chosen.push_back(*c);
-    arms = candidates_[*c];
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto c = n == 1 ? 0 : static_cast<std::size_t>(std::lround(static_cast<double>(k * (N - 1)) / static_cast<double>(n - 1)));
+    if (chosen.empty() || chosen.back() != c) chosen.push_back(c);
   }
   return chosen;
 }
@@ -228,7 +228,10 @@ void ParameterDesign::update() {
 }
 
 bool ParameterDesign::target_reached() const {
-  if (!fit_ || fit_->chi2_per_dof > options_.fit.misfit_limit) return false;
+  // Not before every seed is in: the spread is what lets a misfit show.
+  if (!fit_ || fit_->points < std::min(candidates_.size(), std::max<std::size_t>(5, 2 * x_.size() + 3)) ||
+      fit_->chi2_per_dof > options_.fit.misfit_limit)
+    return false;
   return std::all_of(fit_->parameters.begin(), fit_->parameters.end(), [&](const FittedParameter& p) {
     return !p.at_bound && p.identifiable && std::isfinite(p.u) && p.u <= options_.target_rel_u * std::abs(p.value);
   });

@@ -92,6 +92,9 @@ class Instrument {
   Scan resume(std::int64_t scan, const std::string& actor);
   Scan cancel(std::int64_t scan, const std::string& actor, const std::string& reason);
   std::optional<std::int64_t> running_scan() const;
+  // The running adaptive scan's loop state (scan.get's `adaptive`); nullopt for any other
+  // scan, whose last state is stored with it (kind "adaptive").
+  std::optional<nlohmann::json> adaptive_status(std::int64_t scan) const;
   // Throws Error(plan_rejected) naming the geometry ("geometries[12]") and the limit.
   void validate_plan(const ScanPlan& plan) const;
 
@@ -187,6 +190,10 @@ class Instrument {
   // The scan's verdict from every point so far: stored when it changes, the sustained
   // divergence alert raised or updated, a calibration hint at the end (`final`).
   void judge_scan(std::int64_t point_index, bool final);
+  // Completes the running scan; an adaptive one stores its loop's final state and says in
+  // the reason why it stopped (`at_max_points`: it used every point allowed).
+  void finish_adaptive_or_complete(bool at_max_points);
+  nlohmann::json adaptive_json() const;
 
   const Config& config_;
   Store& store_;
@@ -249,6 +256,7 @@ class Instrument {
   std::atomic<std::int64_t> heartbeat_ns_{0};
   // Statistics (under mu_).
   std::uint64_t points_measured_ = 0;
+  nlohmann::json adaptive_status_;  // of the running adaptive scan (null otherwise)
   std::deque<double> overhead_ms_;  // the last 1000 points
   mutable std::optional<std::pair<std::uint64_t, nlohmann::json>> stats_cache_;  // per points_measured_
 };

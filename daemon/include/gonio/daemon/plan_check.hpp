@@ -8,6 +8,8 @@
 //   - the arms keep the minimum separation at every geometry;
 //   - the arms can travel from each geometry to the next, one arm after the other in either
 //     order, without sweeping through the collision zone (the runner moves them that way);
+//     an adaptive plan's order is chosen as it runs, so its loop only chooses moves that
+//     pass the same test (arms_can_move) and this check leaves the order out;
 //   - the plan's wavelengths lie within the photometer's, when its grid is known.
 // A violation throws Error(plan_rejected) whose field names the geometry ("geometries[12]")
 // or "wavelengths", and whose message says which limit and by how much.
@@ -35,5 +37,8 @@ struct DeviceFacts {
 
 void check_plan(const ScanPlan& plan, const drivers::MotionGuard& guard,
                 const DeviceFacts& devices);
+
+// Whether the arms can go from `a` to `b`, one arm after the other in either order.
+bool arms_can_move(const drivers::MotionGuard& guard, const Geometry& a, const Geometry& b);
 
 }  // namespace gonio::daemon

@@ -168,6 +168,10 @@ struct CurveDesignOptions {
   double seed_spacing_deg = 10;
   // The readings' own noise is no interpolation error: a gap below k·u is not refined.
   double coverage_k = 2;
+  // The higher-order interpolant is not exact either: the estimate is this multiple of the
+  // difference (the coverage of the estimate is tested against dense curves,
+  // tests/unit/twin/design/curve_design_test.cpp).
+  double safety = 1.5;
   void validate() const;
 };
 
@@ -184,15 +188,20 @@ class CurveDesign final : public Design {
   // Per candidate: the estimated relative error of the interpolated curve (0 where
   // measured), from the last update.
   const std::vector<double>& estimated_errors() const noexcept { return error_; }
-  // The interpolated curve (linear between the measured neighbours along its curve) at
-  // candidate c, per channel; the measurement itself where measured. Empty when c's curve
-  // has fewer than two measured points around it.
+  // The interpolated curve at candidate c, per channel: the local cubic (in log β where
+  // positive) through its measured neighbours along its curve; the measurement itself where
+  // measured. Empty when c has no measured point on either side.
   std::vector<double> interpolate(std::size_t c) const;
 
  private:
   struct Curve {
     std::vector<std::size_t> members;  // candidate indices by receiving angle
   };
+  struct Estimate {
+    std::vector<double> value;  // delivered, per channel
+    double error = 0;           // relative, over the channels
+  };
+  std::optional<Estimate> estimate(std::size_t c) const;
   CurveDesignOptions options_;
   std::vector<Curve> curves_;
   std::vector<std::size_t> curve_of_, position_;  // per candidate
