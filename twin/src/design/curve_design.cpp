@@ -32,16 +32,13 @@ constexpr double kUnknown = 1e300;
 
 long key(double v) { return std::lround(v * 1e6); }
 
-// Lagrange interpolation through (xs, ys) at x.
-double lagrange(const std::vector<double>& xs, const std::vector<double>& ys, double x) {
-  double sum = 0;
-  for (std::size_t i = 0; i < xs.size(); ++i) {
-    double w = 1;
+// The Lagrange weights of the interpolant through the nodes xs at x (Σ w_i y_i).
+std::vector<double> lagrange_weights(const std::vector<double>& xs, double x) {
+  std::vector<double> w(xs.size(), 1.0);
+  for (std::size_t i = 0; i < xs.size(); ++i)
     for (std::size_t j = 0; j < xs.size(); ++j)
-      if (j != i) w *= (x - xs[j]) / (xs[i] - xs[j]);
-    sum += w * ys[i];
-  }
-  return sum;
+      if (j != i) w[i] *= (x - xs[j]) / (xs[i] - xs[j]);
+  return w;
 }
 
 }  // namespace
@@ -53,6 +50,7 @@ void CurveDesignOptions::validate() const {
     throw Error::out_of_range("seed_spacing_deg", seed_spacing_deg, 0.1, 180, "°");
   if (!(coverage_k >= 0 && coverage_k <= 10)) throw Error::out_of_range("coverage_k", coverage_k, 0, 10);
   if (!(safety >= 1 && safety <= 10)) throw Error::out_of_range("safety", safety, 1, 10);
+  if (!(floor >= 0 && floor <= 1)) throw Error::out_of_range("floor", floor, 0, 1);
 }
 
 CurveDesign::CurveDesign(std::vector<Geometry> candidates, CurveDesignOptions options)
@@ -161,39 +159,53 @@ std::optional<CurveDesign::Estimate> CurveDesign::estimate(std::size_t c) const 
   const auto left = shifted(3, 1), right = shifted(1, 3);
   const double x = candidates_[c].theta_r;
   const auto& a = points_[m[known[k - 1]]];
-  const auto& b = points_[m[known[k]]];
-  const double xa = candidates_[m[known[k - 1]]].theta_r, xb = candidates_[m[known[k]]].theta_r;
-  const double t = xb - xa > 1e-12 ? (x - xa) / (xb - xa) : 0.5;
   Estimate out;
   out.error = outer.size() > inner.size() ? 0 : kUnknown;
+  // Per candidate node, its weight in the delivered interpolant and in each comparison.
+  const auto weights = [&](const std::vector<std::size_t>& nodes) {
+    std::vector<double> xs;
+    for (const auto n : nodes) xs.push_back(candidates_[n].theta_r);
+    const auto w = lagrange_weights(xs, x);
+    std::map<std::size_t, double> by_node;
+    for (std::size_t j = 0; j < nodes.size(); ++j) by_node[nodes[j]] = w[j];
+    return by_node;
+  };
+  const auto w_inner = weights(inner);
+  std::vector<std::map<std::size_t, double>> comparisons{weights(outer)};
+  if (inner.size() == 4) {
+    if (!left.empty()) comparisons.push_back(weights(left));
+    if (!right.empty()) comparisons.push_back(weights(right));
+  }
   for (std::size_t ch = 0; ch < a.beta.size(); ++ch) {
     bool positive = true;
     for (const auto n : outer) positive = positive && points_[n].beta[ch] > 0;
-    // In logarithms where the values allow: relative errors directly, u/β as the noise.
-    const auto y = [&](std::size_t n) {
-      return positive ? std::log(points_[n].beta[ch]) : points_[n].beta[ch];
-    };
-    const auto through = [&](const std::vector<std::size_t>& nodes) {
-      std::vector<double> xs, ys;
-      for (const auto n : nodes) {
-        xs.push_back(candidates_[n].theta_r);
-        ys.push_back(y(n));
-      }
-      return lagrange(xs, ys, x);
-    };
-    const double delivered = through(inner);
-    const double u = positive ? (1 - t) * a.u[ch] / a.beta[ch] + t * b.u[ch] / b.beta[ch]
-                              : (1 - t) * a.u[ch] + t * b.u[ch];
+    double peak = 0;  // of the curve's measured values in this channel
+    for (const auto& kn : known) peak = std::max(peak, points_[m[kn]].beta[ch]);
+    // In logarithms where the values allow (relative errors directly, u/β as the noise).
+    const auto y = [&](std::size_t n) { return positive ? std::log(points_[n].beta[ch]) : points_[n].beta[ch]; };
+    const auto sd = [&](std::size_t n) { return positive ? points_[n].u[ch] / points_[n].beta[ch] : points_[n].u[ch]; };
+    double delivered = 0;
+    for (const auto& [n, w] : w_inner) delivered += w * y(n);
     out.value.push_back(positive ? std::exp(delivered) : delivered);
     if (out.error >= kUnknown) continue;
-    double spread = std::abs(through(outer) - delivered);
-    if (inner.size() == 4) {
-      if (!left.empty()) spread = std::max(spread, std::abs(through(left) - delivered));
-      if (!right.empty()) spread = std::max(spread, std::abs(through(right) - delivered));
+    // Each comparison's difference from the delivered value, less k times that difference's
+    // own standard deviation from the readings' noise (exact: both are linear in the readings).
+    double gap = 0;
+    for (const auto& wc : comparisons) {
+      auto diff_w = wc;
+      for (const auto& [n, w] : w_inner) diff_w[n] -= w;
+      double diff = 0, var = 0;
+      for (const auto& [n, w] : diff_w) {
+        diff += w * y(n);
+        var += w * w * sd(n) * sd(n);
+      }
+      gap = std::max(gap, options_.safety * std::abs(diff) - options_.coverage_k * std::sqrt(var));
     }
-    double gap = std::max(0.0, options_.safety * spread - options_.coverage_k * u);
-    if (!positive) gap /= std::max(std::abs(delivered), 1e-12);
-    out.error = std::max(out.error, gap);
+    // Relative to the value, but not below floor × the curve's peak: a tail a thousand
+    // times darker than the lobe need not be known to 1 % of itself.
+    const double value = out.value.back();
+    const double scale = std::max({std::abs(value), options_.floor * peak, 1e-300});
+    out.error = std::max(out.error, positive ? gap * value / scale : gap / scale);
   }
   return out;
 }

@@ -135,6 +135,9 @@ DesignStudy study_design(const std::string& model, const std::vector<Geometry>& 
     out.adaptive = run_adaptive(design, readings, options.max_points, timing);
     double vs_dense = 0, vs_truth = 0;
     const double k = options.curve.coverage_k;
+    std::vector<double> peak(grid.size(), 0.0);
+    for (const auto& p : pred)
+      for (std::size_t ch = 0; ch < peak.size(); ++ch) peak[ch] = std::max(peak[ch], p.beta[ch]);
     for (std::size_t c = 0; c < candidates.size(); ++c) {
       const auto in = design.interpolate(c);
       if (in.empty()) {
@@ -144,8 +147,9 @@ DesignStudy study_design(const std::string& model, const std::vector<Geometry>& 
       for (std::size_t ch = 0; ch < in.size(); ++ch) {
         const double t = pred[c].beta[ch], d = readings[c].beta[ch];
         const double u = std::hypot(options.noise_rel * t, options.noise_abs);
-        vs_truth = std::max(vs_truth, std::max(0.0, std::abs(in[ch] - t) - k * u) / std::abs(t));
-        vs_dense = std::max(vs_dense, std::max(0.0, std::abs(in[ch] - d) - k * std::sqrt(2.0) * u) / std::abs(d));
+        const double scale = std::max(std::abs(t), options.curve.floor * peak[ch]);
+        vs_truth = std::max(vs_truth, std::max(0.0, std::abs(in[ch] - t) - k * u) / scale);
+        vs_dense = std::max(vs_dense, std::max(0.0, std::abs(in[ch] - d) - k * std::sqrt(2.0) * u) / scale);
       }
     }
     out.error_vs_dense = vs_dense;

@@ -50,10 +50,13 @@ Outcome run(const std::function<double(double)>& f, double tolerance, double noi
   out.points = d.measured();
   out.reached = d.target_reached();
   out.estimated = d.status().estimated_error.value_or(1e300);
+  double peak = 0;
+  for (const auto& g : cand) peak = std::max(peak, f(g.theta_r));
   for (std::size_t c = 0; c < cand.size(); ++c) {
     const auto v = d.interpolate(c);
     const double t = f(cand[c].theta_r), u = std::hypot(noise_rel * t, 1e-6);
-    out.actual = std::max(out.actual, std::max(0.0, std::abs(v.at(0) - t) - o.coverage_k * u) / t);
+    // Relative as the tolerance is: to max(β, floor × peak).
+    out.actual = std::max(out.actual, std::max(0.0, std::abs(v.at(0) - t) - o.coverage_k * u) / std::max(t, o.floor * peak));
   }
   return out;
 }

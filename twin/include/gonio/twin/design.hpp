@@ -162,7 +162,10 @@ class ParameterDesign final : public Design {
 };
 
 struct CurveDesignOptions {
-  double tolerance = 0.01;  // relative to the curve
+  // Relative to the curve: to max(|β|, floor × the curve's peak) per channel, as
+  // `gonio-twin plan` measures it, so that tails far below the lobe count absolutely.
+  double tolerance = 0.01;
+  double floor = 0.01;
   ScanTiming timing;
   // Seeds: both ends, the specular direction and points at most this far apart.
   double seed_spacing_deg = 10;
@@ -231,7 +234,8 @@ struct DesignRun {
 struct DesignStudy {
   DesignRun uniform, adaptive;
   // Curve mode: the interpolated adaptive curve against the uniform (dense) measurement and
-  // against the noise-free truth: max relative error over candidates and channels.
+  // against the noise-free truth: max relative error over candidates and channels, beyond
+  // the readings' k·u, relative as the tolerance (CurveDesignOptions::floor).
   std::optional<double> error_vs_dense, error_vs_truth;
   nlohmann::json to_json(const std::vector<Geometry>& candidates) const;
 };
