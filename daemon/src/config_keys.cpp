@@ -277,13 +277,9 @@ ConfigKey one_of(std::string_view section, std::string_view name, std::string Co
   });
 }
 
-std::vector<ConfigKey> make_keys() {
+// [server]: listeners and their limits
+void server_keys(std::vector<ConfigKey>& k) {
   using C = Config;
-  using M = Config::Mqtt;
-  using A = Config::Archive;
-  using L = drivers::MotionLimits;
-  std::vector<ConfigKey> k;
-  // [server]
   k.push_back(listen_key());
   k.push_back(boolean("server", "allow_remote", field(&C::allow_remote),
                       "allow TCP/HTTP on non-loopback addresses"));
@@ -335,7 +331,11 @@ std::vector<ConfigKey> make_keys() {
       "`/usr/share/gonio/web`"));
   k.push_back(one_of("server", "log_level", &C::log_level, {"trace", "debug", "info", "warn", "error"},
                      "one of trace, debug, info, warn, error", "how much goniod logs"));
-  // [auth], [auth.unix]
+}
+
+// [auth]: tokens; [auth.unix]: the roles of Unix-socket peers
+void auth_keys(std::vector<ConfigKey>& k) {
+  using C = Config;
   k.push_back(tokens_key());
   k.push_back(ids_key("admin_uids", &C::UnixRoles::admin_uids, "`[0, goniod's uid]`",
                       "Unix-socket peers with one of these uids are admin"));
@@ -349,7 +349,11 @@ std::vector<ConfigKey> make_keys() {
                       "Unix-socket peers with one of these uids are viewer"));
   k.push_back(ids_key("viewer_gids", &C::UnixRoles::viewer_gids, "`[]`",
                       "… or in one of these groups; a peer matching nothing must `auth.login`"));
-  // [store]
+}
+
+// [store]
+void store_keys(std::vector<ConfigKey>& k) {
+  using C = Config;
   k.push_back(custom(
       "store", "synchronous", "string", "full or normal",
       "`full`: every committed point is fsynced before it is published, so a power cut loses no "
@@ -371,7 +375,11 @@ std::vector<ConfigKey> make_keys() {
                      "raised and no new scan starts; a store made read-only by a full disk takes "
                      "writes again once this plus the 1 MiB reserve is free",
                      " MiB"));
-  // [instrument]
+}
+
+// [instrument]: the profile, the drivers, timeouts, ranging, recovery
+void instrument_keys(std::vector<ConfigKey>& k) {
+  using C = Config;
   k.push_back(text("instrument", "profile", field(&C::profile), "twin instrument profile: preset or JSON file"));
   k.push_back(driver_key("motion", &C::motion,
                          "driver table: `driver` (`modbus`, `mock`) and that driver's keys"));
@@ -427,7 +435,11 @@ std::vector<ConfigKey> make_keys() {
                      if (c.reconnect_max < c.reconnect_initial)
                        throw Error::invalid("instrument.reconnect_max_s", "must be at least reconnect_initial_s");
                    }));
-  // [instrument.limits]
+}
+
+// [instrument.limits]: the motion guard's table
+void limits_keys(std::vector<ConfigKey>& k) {
+  using L = drivers::MotionLimits;
   k.push_back(limits_key("incidence", &L::incidence_min, &L::incidence_max, 0, 89.9,
                          "soft limits, degrees: the one limits table, checked before every move "
                          "reaches the motion driver"));
@@ -446,7 +458,11 @@ std::vector<ConfigKey> make_keys() {
              },
              [](const Config& c) { return c.limits.min_separation ? json(*c.limits.min_separation) : json(); }),
       "mock: its profile's (gcms4: 10); otherwise 10"));
-  // [twin]
+}
+
+// [twin]: the prediction's estimator
+void twin_keys(std::vector<ConfigKey>& k) {
+  using C = Config;
   k.push_back(integer("twin", "threads", field(&C::twin_threads), 0, 256, "twin workers (0: one per core)"));
   k.push_back(number("twin", "rel_se", field(&C::twin_rel_se), 1e-5, 0.5,
                      "relative standard error every prediction aims at"));
@@ -464,7 +480,11 @@ std::vector<ConfigKey> make_keys() {
                throw Error::invalid("twin.data_dir", fmt::format("'{}' must be an absolute path", c.twin_data_dir));
            }),
       "`<state-dir>/data`"));
-  // [divergence]
+}
+
+// [divergence]: the decision rule and what a verdict does
+void divergence_keys(std::vector<ConfigKey>& k) {
+  using C = Config;
   k.push_back(number("divergence", "coverage_k", field(&C::coverage_k), 0.5, 10,
                      "coverage factor k of the decision rule "
                      "([docs/decision-rule.md](../docs/decision-rule.md))"));
@@ -482,7 +502,11 @@ std::vector<ConfigKey> make_keys() {
   k.push_back(boolean("divergence", "diagnose", field(&C::diagnose),
                       "at the end of a scan whose verdict raised the alert, refit the named cause "
                       "through the inverse twin and append it to the alert"));
-  // [webhook]
+}
+
+// [webhook]
+void webhook_keys(std::vector<ConfigKey>& k) {
+  using C = Config;
   k.push_back(with_default(text("webhook", "url", field(&C::webhook_url),
                                 "`http://HOST:PORT/PATH`: new alerts are POSTed as JSON"),
                            "—"));
@@ -492,7 +516,12 @@ std::vector<ConfigKey> make_keys() {
   k.push_back(seconds("webhook", "timeout_s", field(&C::webhook_timeout), 0.1, 600, "per POST"));
   k.push_back(one_of("webhook", "min_severity", &C::webhook_min_severity, {"info", "warning", "critical"},
                      "info, warning or critical", "alerts below this are not POSTed"));
-  // [mqtt]
+}
+
+// [mqtt]: telemetry
+void mqtt_keys(std::vector<ConfigKey>& k) {
+  using C = Config;
+  using M = Config::Mqtt;
   k.push_back(with_default(
       text("mqtt", "url", field(&C::mqtt, &M::url),
            "`mqtt://HOST[:PORT]` (1883) or `mqtts://HOST[:PORT]` (8883): publish telemetry there "
@@ -521,7 +550,12 @@ std::vector<ConfigKey> make_keys() {
                       "telemetry messages waiting for the broker; beyond, the oldest is dropped and counted"));
   k.push_back(integer("mqtt", "keepalive_s", field(&C::mqtt, &M::keepalive_s), 5, 3600,
                       "MQTT keep-alive, seconds"));
-  // [archive]
+}
+
+// [archive]: the central PostgreSQL archive
+void archive_keys(std::vector<ConfigKey>& k) {
+  using C = Config;
+  using A = Config::Archive;
   k.push_back(with_default(
       custom("archive", "postgres", "string", "",
              "libpq connection string or URI of the central archive (below); empty: no archive; "
@@ -538,6 +572,13 @@ std::vector<ConfigKey> make_keys() {
                       "reconnection back-off cap; a connection string without `connect_timeout` gets 10 s"));
   k.push_back(seconds("archive", "max_backlog_age_s", field(&C::archive, &A::max_backlog_age), 1, 7 * 86400,
                       "an outbox row older than this raises an `archive_backlog` warning"));
+}
+
+std::vector<ConfigKey> make_keys() {
+  std::vector<ConfigKey> k;
+  for (auto* section : {server_keys, auth_keys, store_keys, instrument_keys, limits_keys, twin_keys,
+                        divergence_keys, webhook_keys, mqtt_keys, archive_keys})
+    section(k);
   return k;
 }
 
