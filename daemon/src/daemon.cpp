@@ -150,6 +150,19 @@ std::string axes_text(const drivers::SideCheck& s) {
   return text;
 }
 
+// The keys the printed configuration leaves out: not set, so their values are decided at
+// start (the admins' uids are goniod's own, ...). Named in comments so that every key shows.
+std::string unset_keys(const Config& config) {
+  std::string out;
+  for (const auto& key : config_keys()) {
+    if (!key.write(config).is_null()) continue;
+    std::string shown(key.default_text);
+    std::erase(shown, '`');
+    out += fmt::format("# {}.{} is not set: {}\n", key.section, key.name, shown == "—" ? "none" : shown);
+  }
+  return out.empty() ? out : out + "\n";
+}
+
 // Client work yields to the measurement. The threads that serve clients (the network's
 // I/O threads and the RPC workers) run kClientNice steps below the rest of goniod (the scan
 // runner, the twin's workers, the control methods' threads, MQTT, the archive), so that
@@ -408,6 +421,7 @@ int check_config(const DaemonOptions& o, std::ostream& out, std::ostream& err) {
                        "# defaults filled in); it also listens on unix:<state-dir>/goniod.sock.\n\n",
                        source, GONIO_VERSION_STRING)
         << json_to_toml(config.to_json()) << "\n\n"
+        << unset_keys(config)
         << fmt::format("# instrument: motion driver '{}', axes {}; photometer driver '{}'\n",
                        inst.motion_driver, axes_text(inst.motion), inst.photometer_driver)
         << fmt::format("# the arms are kept {}° apart{}\n", inst.min_separation,

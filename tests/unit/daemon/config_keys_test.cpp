@@ -5,9 +5,11 @@
 #include <sstream>
 #include <string>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "gonio/daemon/config.hpp"
+#include "gonio/daemon/daemon.hpp"
 
 namespace gonio::daemon {
 namespace {
@@ -76,6 +78,22 @@ TEST(ConfigKeys, TheCheckedConfigurationPrintsEveryKey) {
     if (!find(defaults, key)) {
       EXPECT_FALSE(key.default_text.empty()) << key.section << "." << key.name;
     }
+}
+
+// What goniod --check-config prints: each key in its table, or named as not set.
+TEST(ConfigKeys, CheckConfigShowsEveryKey) {
+  DaemonOptions o;
+  o.state_dir = "/nonexistent";
+  o.mock = true;
+  std::ostringstream out, err;
+  ASSERT_EQ(check_config(o, out, err), exit_code::ok) << err.str();
+  const auto text = out.str();
+  const auto printed = toml_to_json(text, "printed");
+  for (const auto& key : config_keys()) {
+    const auto unset = fmt::format("\n# {}.{} is not set: ", key.section, key.name);
+    EXPECT_TRUE(find(printed, key) || text.find(unset) != std::string::npos)
+        << key.section << "." << key.name << " is missing from:\n" << text;
+  }
 }
 
 TEST(ConfigKeys, EveryPrintedKeyReadsBack) {

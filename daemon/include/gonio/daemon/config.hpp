@@ -2,9 +2,9 @@
 //
 // The file is converted to JSON and read with json_util::ObjectReader, so a bad key or
 // value fails with the key's dotted path, the value and the allowed range
-// ("divergence.z_threshold = 0 is outside the allowed range [0.5, 100]"). Every key and its
-// default is listed in daemon/README.md; daemon/examples/ holds a file for the mock and one
-// for real hardware. Driver tables ([instrument.motion], [instrument.photometer]) are
+// ("divergence.z_threshold = 0 is outside the allowed range [0.5, 100]"). Every key is
+// described once (ConfigKey, config_keys.cpp), and daemon/README.md's key table is made from
+// those rows; daemon/examples/ holds a file for the mock and one for real hardware. Driver tables ([instrument.motion], [instrument.photometer]) are
 // handed to the driver registry as JSON, which validates them in turn.
 #pragma once
 
