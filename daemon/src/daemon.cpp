@@ -150,6 +150,19 @@ std::string axes_text(const drivers::SideCheck& s) {
   return text;
 }
 
+// The keys the printed configuration leaves out: not set, so their values are decided at
+// start (the admins' uids are goniod's own, ...). Named in comments so that every key shows.
+std::string unset_keys(const Config& config) {
+  std::string out;
+  for (const auto& key : config_keys()) {
+    if (!key.write(config).is_null()) continue;
+    std::string shown(key.default_text);
+    std::erase(shown, '`');
+    out += fmt::format("# {}.{} is not set: {}\n", key.section, key.name, shown == "—" ? "none" : shown);
+  }
+  return out.empty() ? out : out + "\n";
+}
+
 // Client work yields to the measurement. The threads that serve clients (the network's
 // I/O threads and the RPC workers) run kClientNice steps below the rest of goniod (the scan
 // runner, the twin's workers, the control methods' threads, MQTT, the archive), so that
@@ -169,6 +182,221 @@ void yield_to_measurement() {
   const int now = ::getpriority(PRIO_PROCESS, tid);
   if (errno == 0 && ::setpriority(PRIO_PROCESS, tid, std::min(19, now + kClientNice)) != 0)
     spdlog::debug("cannot lower a client thread's priority: {}", std::strerror(errno));
+}
+
+constexpr const char* kRecoverReason =
+    "goniod was stopped uncleanly during the scan; resumes at the next unmeasured point";
+
+// The store in the state directory, the scans a crash left running marked to resume. On a
+// full disk it opens read-only and the recovery waits until it can write (recover_later).
+struct OpenedStore {
+  std::unique_ptr<Store> store;
+  bool recover_later = false;
+};
+
+OpenedStore open_store(const Config& config, const fs::path& state) {
+  std::error_code ec;
+  fs::create_directories(state, ec);
+  if (ec) throw Error(Errc::io_error, fmt::format("cannot create {}: {}", state.string(), ec.message()));
+  OpenedStore out;
+  out.store = std::make_unique<Store>(state / "goniod.db", config.synchronous_full);
+  out.store->set_min_free_mb(config.min_free_mb);
+  // Before anything is written, so that the archive sees every change of this run.
+  out.store->set_outbox(!config.archive.postgres.empty());
+  try {
+    for (auto id : out.store->recover_running(kRecoverReason))
+      spdlog::warn("scan {} was running when goniod last stopped; it resumes first", id);
+  } catch (const Error& e) {
+    if (e.code() != Errc::storage_unavailable) throw;
+    out.recover_later = true;
+    spdlog::error("starting with a read-only store: {}", e.what());
+  }
+  return out;
+}
+
+void write_admin_token(Auth& auth, const fs::path& state) {
+  try {
+    if (auth.ensure_admin_token(state / "admin.token"))
+      spdlog::info("wrote a new admin token to {} (mode 0600)", (state / "admin.token").string());
+  } catch (const Error& e) {
+    if (e.code() != Errc::storage_unavailable) throw;
+    spdlog::error("no new admin token: {}", e.what());
+  }
+}
+
+// The central archive and MQTT telemetry, each null unless configured.
+struct Telemetry {
+  std::unique_ptr<ArchiveShipper> archive;
+  std::unique_ptr<MqttPublisher> mqtt;
+};
+
+Telemetry make_telemetry(const Config& config, Store& store, AlertService& alerts, Instrument& instrument) {
+  Telemetry t;
+  if (!config.archive.postgres.empty())
+    t.archive = std::make_unique<ArchiveShipper>(
+        config.archive,
+        config.archive.instrument.empty() ? default_instrument_id() : config.archive.instrument,
+        store, &alerts);
+  if (!config.mqtt.url.empty())
+    t.mqtt = std::make_unique<MqttPublisher>(
+        config.mqtt, config.mqtt.instrument.empty() ? default_instrument_id() : config.mqtt.instrument,
+        [&instrument] { return instrument.status().dump(); });
+  return t;
+}
+
+void start_telemetry(Telemetry& t, const Config& config, Hub& hub) {
+  if (t.mqtt) {
+    hub.set_tap([p = t.mqtt.get()](std::string_view method, const std::string& params,
+                                   std::optional<std::int64_t> scan) { p->publish(method, params, scan); });
+    t.mqtt->start();
+    spdlog::info("mqtt: publishing to {} under {}", config.mqtt.url, t.mqtt->topics().base());
+  }
+  if (t.archive) {
+    t.archive->start();
+    spdlog::info("archive: shipping to PostgreSQL as instrument '{}'", t.archive->instrument());
+  }
+}
+
+rpc::DispatchLimits dispatch_limits(const Config& config) {
+  rpc::DispatchLimits l;
+  l.max_batch = config.max_batch;
+  l.max_response_bytes = config.max_response_bytes;
+  l.batch_window = config.max_in_flight;
+  return l;
+}
+
+// The dashboard's files. Unless server.web_root is set, a build tree's goniod serves the
+// tree's own (<build>/web/dist, beside bin/) before the installed one.
+std::shared_ptr<const WebRoot> load_dashboard(const Config& config) {
+  std::error_code exe_ec;
+  const auto web_root = config.served_web_root(fs::read_symlink("/proc/self/exe", exe_ec).string());
+  auto web = std::make_shared<const WebRoot>(web_root.empty() ? WebRoot{} : WebRoot::load(web_root));
+  const char* why = config.web_root_set ? "server.web_root" : web_root != config.web_root ? "beside goniod" : "the installed one";
+  if (web->empty())
+    spdlog::info("no dashboard: {} holds no files", web_root.empty() ? "server.web_root" : web_root);
+  else
+    spdlog::info("dashboard: {} files from {} ({})", web->size(), web_root, why);
+  return web;
+}
+
+// The state dir's socket always, then the configured listeners; throws Error when one
+// cannot be bound.
+void open_listeners(asio::io_context& io, const Config& config, const fs::path& state,
+                    const net::Context& ctx, std::vector<std::shared_ptr<net::Listener>>& listeners) {
+  auto uris = config.listen;
+  const auto default_sock = (state / "goniod.sock").string();
+  if (std::none_of(uris.begin(), uris.end(), [&](const ListenUri& u) {
+        return u.kind == ListenUri::Kind::unix_socket && u.path == default_sock;
+      }))
+    uris.insert(uris.begin(), ListenUri::parse("unix:" + default_sock));
+  for (const auto& u : uris) {
+    switch (u.kind) {
+      case ListenUri::Kind::unix_socket: listeners.push_back(net::listen_unix(io, u.path, ctx)); break;
+      case ListenUri::Kind::tcp: listeners.push_back(net::listen_tcp(io, u.host, u.port, ctx)); break;
+      case ListenUri::Kind::http: listeners.push_back(net::listen_http(io, u.host, u.port, ctx)); break;
+    }
+    spdlog::info("listening on {}", listeners.back()->endpoint());
+  }
+}
+
+// <state-dir>/endpoints.json: the bound URIs (real ports when 0 was asked) for clients.
+json publish_endpoints(const fs::path& state, const std::vector<std::shared_ptr<net::Listener>>& listeners) {
+  json endpoints = json::array();
+  for (const auto& l : listeners) endpoints.push_back(l->endpoint());
+  write_file_atomic(state / "endpoints.json", json{{"pid", ::getpid()}, {"listen", endpoints}}.dump() + "\n",
+                    fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  return endpoints;
+}
+
+// systemd's watchdog, when the unit has one: petted at half its period while the
+// instrument thread is alive too, allowing for the longest device call.
+class Watchdog {
+ public:
+  Watchdog(asio::io_context& io, const Config& config, const Instrument& instrument)
+      : timer_(io), instrument_(instrument),
+        stale_(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+            std::max({config.move_timeout, config.home_timeout, config.measure_timeout}) +
+            std::chrono::seconds(10))) {}
+
+  void start() {
+    std::uint64_t us = 0;
+    if (sd_watchdog_enabled(0, &us) <= 0 || us == 0) return;
+    period_ = std::chrono::microseconds(us / 2);
+    pet();
+  }
+
+ private:
+  void pet() {
+    if (std::chrono::steady_clock::now() - instrument_.heartbeat() < stale_) sd_notify(0, "WATCHDOG=1");
+    else spdlog::error("watchdog: the instrument thread has not run for too long");
+    timer_.expires_after(period_);
+    timer_.async_wait([this](const boost::system::error_code& ec) {
+      if (!ec) pet();
+    });
+  }
+
+  asio::steady_timer timer_;
+  const Instrument& instrument_;
+  std::chrono::steady_clock::duration stale_;
+  std::chrono::microseconds period_{0};
+};
+
+// Audit rows of the daemon itself are not worth refusing to run for on a full disk.
+void audit_self(Store& store, const std::string& action, const json& detail) {
+  try {
+    store.audit("goniod", action, "", detail);
+  } catch (const Error& e) {
+    if (e.code() != Errc::storage_unavailable) throw;
+    spdlog::warn("{} not audited: {}", action, e.what());
+  }
+}
+
+// SIGTERM and SIGINT: the listeners close, the point in progress is finished and the scan
+// parked, then the io threads stop. Parking may wait for a device: it runs on a thread of
+// its own, off the network threads.
+class StopOnSignal {
+ public:
+  StopOnSignal(asio::io_context& io, std::vector<std::shared_ptr<net::Listener>>& listeners,
+               Instrument& instrument)
+      : io_(io), signals_(io, SIGINT, SIGTERM), listeners_(listeners), instrument_(instrument) {
+    signals_.async_wait([this](const boost::system::error_code& ec, int sig) {
+      if (ec || stopping_) return;
+      stopping_ = true;
+      spdlog::info("{}: stopping (finishing the point in progress)", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+      sd_notify(0, "STOPPING=1\nSTATUS=stopping");
+      for (auto& l : listeners_) l->close();
+      stopper_ = std::thread([this] {
+        instrument_.shutdown();
+        io_.stop();
+      });
+    });
+  }
+  void join() {
+    if (stopper_.joinable()) stopper_.join();
+  }
+
+ private:
+  asio::io_context& io_;
+  asio::signal_set signals_;
+  std::vector<std::shared_ptr<net::Listener>>& listeners_;
+  Instrument& instrument_;
+  bool stopping_ = false;
+  std::thread stopper_;
+};
+
+// Runs the io threads until the io_context stops: config.io_threads in all, this one included.
+void run_io(asio::io_context& io, int threads) {
+  std::vector<std::thread> more;
+  for (int i = 1; i < threads; ++i)
+    more.emplace_back([&io] {
+      yield_to_measurement();
+      io.run();
+    });
+  // Everything that keeps the daemon's priority is started by now: this thread's lower
+  // priority is inherited only by what it starts from here on (the stopper at shutdown).
+  yield_to_measurement();
+  io.run();
+  for (auto& t : more) t.join();
 }
 
 }  // namespace
@@ -193,6 +421,7 @@ int check_config(const DaemonOptions& o, std::ostream& out, std::ostream& err) {
                        "# defaults filled in); it also listens on unix:<state-dir>/goniod.sock.\n\n",
                        source, GONIO_VERSION_STRING)
         << json_to_toml(config.to_json()) << "\n\n"
+        << unset_keys(config)
         << fmt::format("# instrument: motion driver '{}', axes {}; photometer driver '{}'\n",
                        inst.motion_driver, axes_text(inst.motion), inst.photometer_driver)
         << fmt::format("# the arms are kept {}° apart{}\n", inst.min_separation,
@@ -227,86 +456,38 @@ int run_daemon(const DaemonOptions& o) {
     return exit_code::usage;
   }
 
-  // ---- state dir and store
   const fs::path state = o.state_dir;
-  std::unique_ptr<Store> store;
-  constexpr const char* kRecoverReason =
-      "goniod was stopped uncleanly during the scan; resumes at the next unmeasured point";
-  bool recover_later = false;
+  OpenedStore opened;
   try {
-    std::error_code ec;
-    fs::create_directories(state, ec);
-    if (ec) throw Error(Errc::io_error, fmt::format("cannot create {}: {}", state.string(), ec.message()));
-    store = std::make_unique<Store>(state / "goniod.db", config.synchronous_full);
-    store->set_min_free_mb(config.min_free_mb);
-    // Before anything is written, so that the archive sees every change of this run.
-    store->set_outbox(!config.archive.postgres.empty());
-    try {
-      for (auto id : store->recover_running(kRecoverReason))
-        spdlog::warn("scan {} was running when goniod last stopped; it resumes first", id);
-    } catch (const Error& e) {
-      if (e.code() != Errc::storage_unavailable) throw;
-      recover_later = true;  // a full disk: start read-only, recover once it can write
-      spdlog::error("starting with a read-only store: {}", e.what());
-    }
+    opened = open_store(config, state);
   } catch (const Error& e) {
     spdlog::critical("{}", e.what());
     return exit_code::state;
   }
+  auto& store = opened.store;
 
   try {
     Auth auth(config.tokens, *store);
-    try {
-      if (auth.ensure_admin_token(state / "admin.token"))
-        spdlog::info("wrote a new admin token to {} (mode 0600)", (state / "admin.token").string());
-    } catch (const Error& e) {
-      if (e.code() != Errc::storage_unavailable) throw;
-      spdlog::error("no new admin token: {}", e.what());
-    }
-
+    write_admin_token(auth, state);
     TwinService twin(config, twin::InstrumentProfile::load(config.profile));
     use_calibrated_profile(*store, twin);
     Hub hub;
     AlertService alerts(*store, hub, parse_enum<Severity>(config.webhook_min_severity, "webhook.min_severity"));
     Instrument instrument(config, *store, twin, alerts, hub);
 
-    // ---- central archive and MQTT telemetry (both off unless configured)
-    std::unique_ptr<ArchiveShipper> archive;
-    if (!config.archive.postgres.empty())
-      archive = std::make_unique<ArchiveShipper>(
-          config.archive,
-          config.archive.instrument.empty() ? default_instrument_id() : config.archive.instrument,
-          *store, &alerts);
-    std::unique_ptr<MqttPublisher> mqtt;
-    if (!config.mqtt.url.empty())
-      mqtt = std::make_unique<MqttPublisher>(
-          config.mqtt, config.mqtt.instrument.empty() ? default_instrument_id() : config.mqtt.instrument,
-          [&instrument] { return instrument.status().dump(); });
+    auto telemetry = make_telemetry(config, *store, alerts, instrument);
     // Unhooks the publisher from the hub before it goes, however this scope is left.
     struct Untap {
       Hub& hub;
       ~Untap() { hub.set_tap(nullptr); }
     } untap{hub};
-    if (mqtt) {
-      hub.set_tap([p = mqtt.get()](std::string_view method, const std::string& params,
-                                   std::optional<std::int64_t> scan) { p->publish(method, params, scan); });
-      mqtt->start();
-      spdlog::info("mqtt: publishing to {} under {}", config.mqtt.url, mqtt->topics().base());
-    }
-    if (archive) {
-      archive->start();
-      spdlog::info("archive: shipping to PostgreSQL as instrument '{}'", archive->instrument());
-    }
+    start_telemetry(telemetry, config, hub);
 
     asio::io_context io;
     asio::thread_pool workers(config.rpc_threads);
     // Control methods (pause, resume, cancel, reset) have threads of their own: a queue of
     // exports on the workers cannot delay them.
     asio::thread_pool control(2);
-    rpc::DispatchLimits dispatch_limits;
-    dispatch_limits.max_batch = config.max_batch;
-    dispatch_limits.max_response_bytes = config.max_response_bytes;
-    dispatch_limits.batch_window = config.max_in_flight;
     rpc::Dispatcher dispatcher([&workers](std::function<void()> f) {
                                  asio::post(workers, [f = std::move(f)] {
                                    yield_to_measurement();
@@ -314,7 +495,7 @@ int run_daemon(const DaemonOptions& o) {
                                  });
                                },
                                [&control](std::function<void()> f) { asio::post(control, std::move(f)); },
-                               dispatch_limits);
+                               dispatch_limits(config));
     dispatcher.set_principal_check([&auth](const Principal& p) { return auth.still_valid(p); });
 
     net::NetStats net_stats;
@@ -332,45 +513,18 @@ int run_daemon(const DaemonOptions& o) {
                         for (const auto& l : listeners) l->end_sessions_of(name);
                       },
                       config.twin_data_dir.empty() ? state / "data" : fs::path(config.twin_data_dir),
-                      archive.get(),
-                      mqtt.get()};
+                      telemetry.archive.get(),
+                      telemetry.mqtt.get()};
     register_methods(dispatcher, services);
 
-    // ---- listeners: the state dir's socket always, then the configured ones.
-    // Unless server.web_root is set, a build tree's goniod serves the tree's own dashboard
-    // (<build>/web/dist, beside bin/) before the installed one.
-    std::error_code exe_ec;
-    const auto web_root = config.served_web_root(fs::read_symlink("/proc/self/exe", exe_ec).string());
-    auto web = std::make_shared<const WebRoot>(web_root.empty() ? WebRoot{} : WebRoot::load(web_root));
-    const char* why = config.web_root_set ? "server.web_root" : web_root != config.web_root ? "beside goniod" : "the installed one";
-    if (web->empty())
-      spdlog::info("no dashboard: {} holds no files", web_root.empty() ? "server.web_root" : web_root);
-    else
-      spdlog::info("dashboard: {} files from {} ({})", web->size(), web_root, why);
-    const net::Context ctx{dispatcher, hub, auth, net::Limits::from(config), net_stats, web};
-    auto uris = config.listen;
-    const auto default_sock = (state / "goniod.sock").string();
-    if (std::none_of(uris.begin(), uris.end(), [&](const ListenUri& u) {
-          return u.kind == ListenUri::Kind::unix_socket && u.path == default_sock;
-        }))
-      uris.insert(uris.begin(), ListenUri::parse("unix:" + default_sock));
+    const net::Context ctx{dispatcher, hub, auth, net::Limits::from(config), net_stats, load_dashboard(config)};
     try {
-      for (const auto& u : uris) {
-        switch (u.kind) {
-          case ListenUri::Kind::unix_socket: listeners.push_back(net::listen_unix(io, u.path, ctx)); break;
-          case ListenUri::Kind::tcp: listeners.push_back(net::listen_tcp(io, u.host, u.port, ctx)); break;
-          case ListenUri::Kind::http: listeners.push_back(net::listen_http(io, u.host, u.port, ctx)); break;
-        }
-        spdlog::info("listening on {}", listeners.back()->endpoint());
-      }
+      open_listeners(io, config, state, ctx, listeners);
     } catch (const Error& e) {
       spdlog::critical("{}", e.what());
       return exit_code::listen;
     }
-    json endpoints = json::array();
-    for (const auto& l : listeners) endpoints.push_back(l->endpoint());
-    write_file_atomic(state / "endpoints.json", json{{"pid", ::getpid()}, {"listen", endpoints}}.dump() + "\n",
-                      fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+    const auto endpoints = publish_endpoints(state, listeners);
 
     if (!config.webhook_url.empty()) {
       alerts.set_sink(net::make_webhook(io, config));
@@ -384,7 +538,7 @@ int run_daemon(const DaemonOptions& o) {
       instrument.set_sustained_listener(
           [&diagnoser](std::int64_t scan, std::int64_t alert) { diagnoser->request(scan, alert); });
     }
-    if (recover_later) instrument.recover_when_writable(kRecoverReason);
+    if (opened.recover_later) instrument.recover_when_writable(kRecoverReason);
     instrument.set_status_listener([](const std::string& s) {
       sd_notifyf(0, "STATUS=%s", s.c_str());
     });
@@ -395,77 +549,29 @@ int run_daemon(const DaemonOptions& o) {
       for (auto& l : listeners) l->close();
       return exit_code::usage;
     }
-    // Audit rows of the daemon itself are not worth refusing to run for on a full disk.
-    const auto audit_self = [&](const std::string& action, const json& detail) {
-      try {
-        store->audit("goniod", action, "", detail);
-      } catch (const Error& e) {
-        if (e.code() != Errc::storage_unavailable) throw;
-        spdlog::warn("{} not audited: {}", action, e.what());
-      }
-    };
-    audit_self("daemon.start", json{{"version", GONIO_VERSION_STRING}, {"listen", endpoints}});
+    audit_self(*store, "daemon.start", json{{"version", GONIO_VERSION_STRING}, {"listen", endpoints}});
 
     // ---- signals, systemd
-    std::thread stopper;
-    asio::signal_set signals(io, SIGINT, SIGTERM);
+    StopOnSignal stop(io, listeners, instrument);
     std::signal(SIGPIPE, SIG_IGN);
-    bool stopping = false;
-    signals.async_wait([&](const boost::system::error_code& ec, int sig) {
-      if (ec || stopping) return;
-      stopping = true;
-      spdlog::info("{}: stopping (finishing the point in progress)", sig == SIGTERM ? "SIGTERM" : "SIGINT");
-      sd_notify(0, "STOPPING=1\nSTATUS=stopping");
-      for (auto& l : listeners) l->close();
-      // Parking the scan may wait for a device; do it off the network threads.
-      stopper = std::thread([&] {
-        instrument.shutdown();
-        io.stop();
-      });
-    });
-    std::uint64_t watchdog_us = 0;
-    asio::steady_timer watchdog(io);
-    std::function<void()> pet;
-    if (sd_watchdog_enabled(0, &watchdog_us) > 0 && watchdog_us > 0) {
-      const auto period = std::chrono::microseconds(watchdog_us / 2);
-      // The runner must be alive too, allowing for the longest device call.
-      const auto stale = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-          std::max({config.move_timeout, config.home_timeout, config.measure_timeout}) +
-          std::chrono::seconds(10));
-      pet = [&, period, stale] {
-        if (std::chrono::steady_clock::now() - instrument.heartbeat() < stale) sd_notify(0, "WATCHDOG=1");
-        else spdlog::error("watchdog: the instrument thread has not run for too long");
-        watchdog.expires_after(period);
-        watchdog.async_wait([&](const boost::system::error_code& ec) {
-          if (!ec) pet();
-        });
-      };
-      pet();
-    }
+    Watchdog watchdog(io, config, instrument);
+    watchdog.start();
     sd_notifyf(0, "READY=1\nSTATUS=ready, listening on %zu endpoint(s)\nMAINPID=%d", listeners.size(),
                static_cast<int>(::getpid()));
     spdlog::info("goniod {} ready (state dir {})", GONIO_VERSION_STRING, state.string());
 
-    std::vector<std::thread> io_threads;
-    for (int i = 1; i < config.io_threads; ++i)
-      io_threads.emplace_back([&io] {
-        yield_to_measurement();
-        io.run();
-      });
-    // Everything that keeps the daemon's priority is started by now: this thread's lower
-    // priority is inherited only by what it starts from here on (the stopper at shutdown).
-    yield_to_measurement();
-    io.run();
-    for (auto& t : io_threads) t.join();
-    if (stopper.joinable()) stopper.join();
+    run_io(io, config.io_threads);
+
+    // ---- shutdown
+    stop.join();
     instrument.shutdown();
     control.join();
     workers.join();
     alerts.set_sink(nullptr);
     hub.set_tap(nullptr);
-    if (mqtt) mqtt->stop();
-    if (archive) archive->stop();
-    audit_self("daemon.stop", json::object());
+    if (telemetry.mqtt) telemetry.mqtt->stop();
+    if (telemetry.archive) telemetry.archive->stop();
+    audit_self(*store, "daemon.stop", json::object());
     spdlog::info("goniod stopped cleanly");
     return exit_code::ok;
   } catch (const Error& e) {

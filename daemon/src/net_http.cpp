@@ -2,7 +2,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
-#include <deque>
 #include <mutex>
 
 #include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange without it
@@ -19,6 +18,7 @@
 
 #include "gonio/daemon/net.hpp"
 #include "net_accept.hpp"
+#include "net_session.hpp"
 
 namespace gonio::daemon::net {
 
@@ -132,14 +132,13 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
  public:
   WsSession(tcp::socket socket, std::string peer, std::shared_ptr<HttpState> st)
       : rpc::Session("ws", std::move(peer), true), ws_(std::move(socket)),
-        read_timer_(ws_.get_executor()), write_timer_(ws_.get_executor()),
-        login_timer_(ws_.get_executor()), st_(std::move(st)), limits_(st_->ctx.limits),
-        stats_(st_->ctx.stats) {
+        read_timer_(ws_.get_executor()), login_timer_(ws_.get_executor()), st_(std::move(st)),
+        limits_(st_->ctx.limits), stats_(st_->ctx.stats), out_(limits_, stats_, 0),
+        write_deadline_(ws_.get_executor(), limits_.write_timeout) {
     ++st_->websockets;
   }
   ~WsSession() override {
     --st_->websockets;
-    stats_.buffered_bytes -= queued_bytes_.load();
   }
 
   void start(http::request<http::string_body> req) {
@@ -181,7 +180,7 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
 
   bool push(std::shared_ptr<const std::string> message) override {
     if (closed_flag_.load()) return false;
-    if (!admit(message->size())) {
+    if (!out_.admit(*message)) {
       asio::post(ws_.get_executor(), [self = shared_from_this()] {
         self->slow_reader("its outgoing queue is full (the peer does not read)");
       });
@@ -198,26 +197,6 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
   }
 
  private:
-  // The same accounting as the NDJSON sessions (net_ndjson.cpp).
-  bool admit(std::size_t bytes, std::size_t extra_messages = 0) {
-    if (queued_.fetch_add(1) + 1 > limits_.max_queue + extra_messages) {
-      --queued_;
-      return false;
-    }
-    const auto mine = queued_bytes_.fetch_add(bytes) + bytes;
-    const auto all = stats_.buffered_bytes.fetch_add(bytes) + bytes;
-    const bool first_small = mine == bytes && bytes <= kReadPauseBytes;
-    if (mine > limits_.max_queue_bytes || (all > limits_.max_buffered_bytes && !first_small)) {
-      release(bytes);
-      return false;
-    }
-    return true;
-  }
-  void release(std::size_t bytes) {
-    --queued_;
-    queued_bytes_ -= bytes;
-    stats_.buffered_bytes -= bytes;
-  }
   void slow_reader(const std::string& why) {
     if (closed_) return;
     ++stats_.slow_readers;
@@ -225,7 +204,7 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
   }
 
   bool may_read() const {
-    return !closed_ && in_flight_ < limits_.max_in_flight && queued_bytes_.load() <= kReadPauseBytes;
+    return !closed_ && in_flight_ < limits_.max_in_flight && !out_.backed_up();
   }
 
   // Frames are read one at a time so that a message that has started must complete within
@@ -276,35 +255,27 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
     });
   }
 
-  void enqueue(std::shared_ptr<const std::string> m, bool counted) {
+  void enqueue(OutputQueue::Message m, bool counted) {
     if (closed_) {
-      if (counted) release(m->size());
+      if (counted) out_.forget(m);
       return;
     }
-    if (!counted && !admit(m->size(), limits_.max_in_flight)) {
+    if (!out_.add(std::move(m), counted)) {
       slow_reader("its outgoing queue is full (the peer does not read its answers)");
       return;
     }
-    out_.push_back(std::move(m));
     do_write();
   }
 
   void do_write() {
     if (writing_ || out_.empty() || closed_) return;
     writing_ = true;
-    const auto gen = ++write_gen_;
-    write_timer_.expires_after(limits_.write_timeout);
-    write_timer_.async_wait([self = shared_from_this(), gen](const error_code& ec) {
-      if (ec || self->closed_ || !self->writing_ || self->write_gen_ != gen) return;
-      self->slow_reader(fmt::format("a write did not complete within {} s (the peer does not read)",
-                                    std::chrono::duration<double>(self->limits_.write_timeout).count()));
-    });
-    ws_.async_write(asio::buffer(*out_.front()), [self = shared_from_this()](const error_code& ec, std::size_t) {
+    write_deadline_.started([self = shared_from_this()] { return !self->closed_ && self->writing_; },
+                            [self = shared_from_this()](const std::string& why) { self->slow_reader(why); });
+    ws_.async_write(asio::buffer(*out_[0]), [self = shared_from_this()](const error_code& ec, std::size_t) {
       self->writing_ = false;
-      self->write_timer_.cancel();
       if (self->closed_) return;
-      self->release(self->out_.front()->size());
-      self->out_.pop_front();
+      self->out_.pop(1);
       if (ec) {
         self->close(ec.message());
         return;
@@ -321,28 +292,24 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
     if (!why.empty()) spdlog::info("ws {}: closing: {}", peer(), why);
     st_->ctx.hub.remove(id());
     read_timer_.cancel();
-    write_timer_.cancel();
+    write_deadline_.cancel();
     login_timer_.cancel();
     error_code ignored;
     beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
     beast::get_lowest_layer(ws_).close();
-    while (!out_.empty() && !writing_) {
-      release(out_.front()->size());
-      out_.pop_front();
-    }
+    if (!writing_) out_.pop(out_.size());
   }
 
   websocket::stream<beast::tcp_stream> ws_;
-  asio::steady_timer read_timer_, write_timer_, login_timer_;
+  asio::steady_timer read_timer_, login_timer_;
   std::shared_ptr<HttpState> st_;
   Limits limits_;
   NetStats& stats_;
+  OutputQueue out_;
+  WriteDeadline write_deadline_;
   beast::flat_buffer buffer_;
-  std::deque<std::shared_ptr<const std::string>> out_;
-  std::atomic<std::size_t> queued_{0}, queued_bytes_{0};
   std::atomic<bool> closed_flag_{false};
   bool reading_ = false, writing_ = false, closed_ = false, message_started_ = false;
-  std::uint64_t write_gen_ = 0;
   std::size_t in_flight_ = 0;
 };
 
@@ -638,24 +605,9 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
 
 std::shared_ptr<Listener> listen_http(asio::io_context& io, const std::string& host,
                                       std::uint16_t port, const Context& ctx) {
-  error_code ec;
-  const auto addr = asio::ip::make_address(host == "localhost" ? "127.0.0.1" : host, ec);
-  if (ec) throw Error(Errc::invalid_argument, fmt::format("http://{}: {}", host, ec.message()));
-  tcp::acceptor acceptor(io);
-  const tcp::endpoint ep(addr, port);
-  acceptor.open(ep.protocol(), ec);
-  if (!ec) acceptor.set_option(asio::socket_base::reuse_address(true), ec);
-  if (!ec) acceptor.bind(ep, ec);
-  if (!ec) acceptor.listen(asio::socket_base::max_listen_connections, ec);
-  if (ec)
-    throw Error(Errc::io_error,
-                fmt::format("cannot listen on http://{}:{}: {}", host, port, ec.message()));
-  const auto bound = acceptor.local_endpoint();
-  const auto a = bound.address().to_string();
-  auto l = std::make_shared<HttpListener>(
-      io, std::move(acceptor),
-      fmt::format("http://{}:{}", bound.address().is_v6() ? "[" + a + "]" : a, bound.port()),
-      std::make_shared<HttpState>(ctx));
+  auto [acceptor, name] = bind_tcp(io, "http", host, port);
+  auto l = std::make_shared<HttpListener>(io, std::move(acceptor), std::move(name),
+                                          std::make_shared<HttpState>(ctx));
   l->accept();
   return l;
 }

@@ -8,7 +8,6 @@
 #include <array>
 #include <cerrno>
 #include <atomic>
-#include <deque>
 #include <filesystem>
 #include <mutex>
 
@@ -27,6 +26,7 @@
 
 #include "gonio/daemon/net.hpp"
 #include "net_accept.hpp"
+#include "net_session.hpp"
 
 namespace gonio::daemon::net {
 
@@ -34,54 +34,6 @@ namespace asio = boost::asio;
 using boost::system::error_code;
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
-
-Limits Limits::from(const Config& c) {
-  Limits l;
-  l.max_message_bytes = c.max_message_bytes;
-  l.read_timeout = c.read_timeout;
-  l.idle_timeout = c.idle_timeout;
-  l.max_queue = c.max_queue;
-  l.max_connections = c.max_connections;
-  l.max_queue_bytes = c.max_queue_bytes;
-  l.max_buffered_bytes = c.max_buffered_bytes;
-  l.write_timeout = c.write_timeout;
-  l.login_timeout = c.login_timeout;
-  l.max_in_flight = c.max_in_flight;
-  l.allowed_origins = c.allowed_origins;
-  const auto& u = c.unix_roles;
-  l.admin_uids = u.admin_uids.value_or(std::vector<std::uint32_t>{0, ::geteuid()});
-  l.admin_gids = u.admin_gids.value_or(std::vector<std::uint32_t>{});
-  l.technician_uids = u.technician_uids.value_or(std::vector<std::uint32_t>{});
-  l.technician_gids = u.technician_gids.value_or(std::vector<std::uint32_t>{::getegid()});
-  l.viewer_uids = u.viewer_uids.value_or(std::vector<std::uint32_t>{});
-  l.viewer_gids = u.viewer_gids.value_or(std::vector<std::uint32_t>{});
-  return l;
-}
-
-json NetStats::to_json() const {
-  return json{{"buffered_bytes", buffered_bytes.load()},
-              {"slow_readers_dropped", slow_readers.load()},
-              {"login_timeouts", login_timeouts.load()},
-              {"refused_origin", refused_origin.load()},
-              {"refused_content_type", refused_content_type.load()},
-              {"accept_backoffs", accept_backoffs.load()},
-              {"overload_dropped", overload_dropped.load()},
-              {"revoked_sessions_ended", revoked_sessions.load()}};
-}
-
-// The role of a Unix-socket peer from its uid and groups: the highest that any of them maps to.
-Role unix_role(const Limits& l, std::uint32_t uid, const std::vector<gid_t>& gids) {
-  const auto has = [](const std::vector<std::uint32_t>& v, std::uint32_t x) {
-    return std::find(v.begin(), v.end(), x) != v.end();
-  };
-  const auto any_gid = [&](const std::vector<std::uint32_t>& v) {
-    return std::any_of(gids.begin(), gids.end(), [&](gid_t g) { return has(v, g); });
-  };
-  if (has(l.admin_uids, uid) || any_gid(l.admin_gids)) return Role::admin;
-  if (has(l.technician_uids, uid) || any_gid(l.technician_gids)) return Role::technician;
-  if (has(l.viewer_uids, uid) || any_gid(l.viewer_gids)) return Role::viewer;
-  return Role::none;
-}
 
 namespace {
 
@@ -103,13 +55,13 @@ class NdjsonSession final : public rpc::Session,
 
   NdjsonSession(Socket socket, std::string peer, std::shared_ptr<ListenerState> ls)
       : rpc::Session(ls->kind, std::move(peer), true), socket_(std::move(socket)),
-        timer_(socket_.get_executor()), write_timer_(socket_.get_executor()),
-        login_timer_(socket_.get_executor()), ls_(std::move(ls)), limits_(ls_->ctx.limits),
-        stats_(ls_->ctx.stats) {}
+        timer_(socket_.get_executor()), login_timer_(socket_.get_executor()), ls_(std::move(ls)),
+        limits_(ls_->ctx.limits), stats_(ls_->ctx.stats), out_(limits_, stats_, 1),
+        write_deadline_(socket_.get_executor(), limits_.write_timeout) {}
 
   ~NdjsonSession() override {
     --ls_->connections;
-    stats_.buffered_bytes -= queued_bytes_.load() + input_accounted_;
+    stats_.buffered_bytes -= input_accounted_;
   }
 
   void start() {
@@ -130,7 +82,7 @@ class NdjsonSession final : public rpc::Session,
 
   bool push(std::shared_ptr<const std::string> message) override {
     if (closing_.load()) return false;
-    if (!admit(message->size() + 1)) {
+    if (!out_.admit(*message)) {
       asio::post(socket_.get_executor(), [self = this->shared_from_this()] {
         self->slow_reader("its outgoing queue is full (the peer does not read)");
       });
@@ -151,28 +103,6 @@ class NdjsonSession final : public rpc::Session,
   }
 
  private:
-  // Reserves room for `bytes` in this connection's queue and in the shared budget: false
-  // when the queue would pass max_queue messages or max_queue_bytes, or all connections
-  // together max_buffered_bytes (then the peer is dropped: it is not reading).
-  bool admit(std::size_t bytes, std::size_t extra_messages = 0) {
-    if (queued_.fetch_add(1) + 1 > limits_.max_queue + extra_messages) {
-      --queued_;
-      return false;
-    }
-    const auto mine = queued_bytes_.fetch_add(bytes) + bytes;
-    const auto all = stats_.buffered_bytes.fetch_add(bytes) + bytes;
-    // A connection with nothing queued may always have one message of a modest size, so
-    // that a flood elsewhere cannot starve it of small answers.
-    const bool first_small = mine == bytes && bytes <= kReadPauseBytes;
-    if (mine > limits_.max_queue_bytes || (all > limits_.max_buffered_bytes && !first_small)) {
-      --queued_;
-      queued_bytes_ -= bytes;
-      stats_.buffered_bytes -= bytes;
-      return false;
-    }
-    return true;
-  }
-
   // Keeps the shared budget's count of this connection's unparsed input up to date.
   void account_input() {
     const auto now = buffer_.size();
@@ -181,15 +111,8 @@ class NdjsonSession final : public rpc::Session,
     input_accounted_ = now;
   }
 
-  void release(std::size_t bytes) {
-    --queued_;
-    queued_bytes_ -= bytes;
-    stats_.buffered_bytes -= bytes;
-  }
-
   bool may_read() const {
-    return !closed_ && !close_after_write_ && in_flight_ < limits_.max_in_flight &&
-           queued_bytes_.load() <= kReadPauseBytes;
+    return !closed_ && !close_after_write_ && in_flight_ < limits_.max_in_flight && !out_.backed_up();
   }
 
   void do_read() {
@@ -314,16 +237,15 @@ class NdjsonSession final : public rpc::Session,
   }
 
   // On the strand. `counted` says whether push() already counted the message.
-  void enqueue(std::shared_ptr<const std::string> m, bool counted = true) {
+  void enqueue(OutputQueue::Message m, bool counted = true) {
     if (closed_) {
-      if (counted) release(m->size() + 1);
+      if (counted) out_.forget(m);
       return;
     }
-    if (!counted && !admit(m->size() + 1, limits_.max_in_flight)) {
+    if (!out_.add(std::move(m), counted)) {
       slow_reader("its outgoing queue is full (the peer does not read its answers)");
       return;
     }
-    out_.push_back(std::move(m));
     do_write();
   }
 
@@ -343,10 +265,10 @@ class NdjsonSession final : public rpc::Session,
     const auto done = [self = this->shared_from_this()](const error_code& ec, std::size_t) {
       self->on_written(ec);
     };
-    write_started_ = Clock::now();
-    arm_write_timer();
+    write_deadline_.started([self = this->shared_from_this()] { return !self->closed_ && self->writing_; },
+                            [self = this->shared_from_this()](const std::string& why) { self->slow_reader(why); });
     if (writing_count_ == 1) {
-      const std::array<asio::const_buffer, 2> bufs{asio::buffer(*out_.front()), asio::buffer("\n", 1)};
+      const std::array<asio::const_buffer, 2> bufs{asio::buffer(*out_[0]), asio::buffer("\n", 1)};
       asio::async_write(socket_, bufs, done);
       return;
     }
@@ -362,10 +284,7 @@ class NdjsonSession final : public rpc::Session,
   void on_written(const error_code& ec) {
     writing_ = false;
     if (closed_) return;
-    for (std::size_t i = 0; i < writing_count_; ++i) {
-      release(out_.front()->size() + 1);
-      out_.pop_front();
-    }
+    out_.pop(writing_count_);
     if (ec) {
       close(ec.message());
       return;
@@ -376,25 +295,6 @@ class NdjsonSession final : public rpc::Session,
     }
     do_write();
     do_read();  // reading may have paused on the queue
-  }
-
-  // The write deadline: one timer, armed when a write starts and none is pending, that
-  // re-arms itself while writes keep completing (most complete at once: arming and
-  // cancelling a timer for each would cost more than the write).
-  void arm_write_timer() {
-    if (write_timer_armed_ || closed_) return;
-    write_timer_armed_ = true;
-    write_timer_.expires_at(write_started_ + limits_.write_timeout);
-    write_timer_.async_wait([self = this->shared_from_this()](const error_code& ec) {
-      self->write_timer_armed_ = false;
-      if (ec || self->closed_ || !self->writing_) return;
-      if (Clock::now() - self->write_started_ >= self->limits_.write_timeout) {
-        self->slow_reader(fmt::format("a write did not complete within {} s (the peer does not read)",
-                                      std::chrono::duration<double>(self->limits_.write_timeout).count()));
-        return;
-      }
-      self->arm_write_timer();  // a later write is in progress: its own deadline
-    });
   }
 
   // One timer: a started message must complete within read_timeout; an idle connection
@@ -430,33 +330,28 @@ class NdjsonSession final : public rpc::Session,
     }
     error_code ignored;
     timer_.cancel();
-    write_timer_.cancel();
+    write_deadline_.cancel();
     login_timer_.cancel();
     socket_.shutdown(Socket::shutdown_both, ignored);
     socket_.close(ignored);
     ls_->ctx.hub.remove(id());
     // What is queued is freed now, not when the last handler lets go of the session.
-    while (!out_.empty() && !writing_) {
-      release(out_.front()->size() + 1);
-      out_.pop_front();
-    }
+    if (!writing_) out_.pop(out_.size());
     buffer_.clear();
     buffer_.shrink_to_fit();
     account_input();
   }
 
   Socket socket_;
-  asio::steady_timer timer_, write_timer_, login_timer_;
+  asio::steady_timer timer_, login_timer_;
   std::shared_ptr<ListenerState> ls_;
   Limits limits_;
   NetStats& stats_;
+  OutputQueue out_;
+  WriteDeadline write_deadline_;
   std::array<char, 16384> chunk_{};
   std::string buffer_;
-  std::deque<std::shared_ptr<const std::string>> out_;
   std::size_t writing_count_ = 0;  // messages at the front of out_ being written
-  Clock::time_point write_started_;
-  bool write_timer_armed_ = false;
-  std::atomic<std::size_t> queued_{0}, queued_bytes_{0};
   std::atomic<bool> closing_{false};
   bool reading_ = false, writing_ = false, closed_ = false, close_after_write_ = false;
   std::size_t in_flight_ = 0;
@@ -626,24 +521,9 @@ std::shared_ptr<Listener> listen_unix(asio::io_context& io, const std::string& p
 
 std::shared_ptr<Listener> listen_tcp(asio::io_context& io, const std::string& host,
                                      std::uint16_t port, const Context& ctx) {
-  using P = asio::ip::tcp;
-  error_code ec;
-  const auto addr = asio::ip::make_address(host == "localhost" ? "127.0.0.1" : host, ec);
-  if (ec) throw Error(Errc::invalid_argument, fmt::format("tcp://{}: {}", host, ec.message()));
-  P::acceptor acceptor(io);
-  const P::endpoint ep(addr, port);
-  acceptor.open(ep.protocol(), ec);
-  if (!ec) acceptor.set_option(asio::socket_base::reuse_address(true), ec);
-  if (!ec) acceptor.bind(ep, ec);
-  if (!ec) acceptor.listen(asio::socket_base::max_listen_connections, ec);
-  if (ec)
-    throw Error(Errc::io_error,
-                fmt::format("cannot listen on tcp://{}:{}: {}", host, port, ec.message()));
-  const auto bound = acceptor.local_endpoint();
-  const auto a = bound.address().to_string();
-  const auto name = fmt::format("tcp://{}:{}", bound.address().is_v6() ? "[" + a + "]" : a, bound.port());
+  auto [acceptor, name] = bind_tcp(io, "tcp", host, port);
   auto ls = std::make_shared<ListenerState>(ctx, "tcp");
-  auto l = std::make_shared<NdjsonListener<P>>(io, std::move(acceptor), name, ls);
+  auto l = std::make_shared<NdjsonListener<asio::ip::tcp>>(io, std::move(acceptor), name, ls);
   l->accept();
   return l;
 }

@@ -308,90 +308,117 @@ void Dispatcher::pump(const std::shared_ptr<Pending>& p, const std::shared_ptr<S
   p->pumping = false;
 }
 
+namespace {
+
+// A request's members once checked (JSON-RPC 2.0 §4), or the error it is refused with.
+struct Envelope {
+  json id = nullptr;  // echoed, when usable, even in errors about the rest of the request
+  bool notification = false;
+  std::string method;
+  json params = json::object();
+  std::optional<json> error;
+  bool answer_error = true;  // false: a notification refused without an answer
+};
+
+Envelope read_envelope(json& req) {
+  Envelope e;
+  const auto refuse = [&](std::string_view msg, std::string_view field) {
+    // An invalid request gets an answer even without an id (spec §5: id null).
+    e.error = error_object(code::invalid_request, msg, Errc::invalid_argument, field);
+    return std::move(e);
+  };
+  if (!req.is_object()) return refuse("a request must be a JSON object", {});
+  const auto id_it = req.find("id");
+  e.notification = id_it == req.end();
+  if (!e.notification) {
+    if (!(id_it->is_string() || id_it->is_number() || id_it->is_null()))
+      return refuse("id must be a string, a number or null", "id");
+    e.id = *id_it;
+  }
+  for (const auto& [key, value] : req.items()) {
+    (void)value;
+    if (key != "jsonrpc" && key != "method" && key != "params" && key != "id")
+      return refuse(fmt::format("unknown member '{}' (allowed: jsonrpc, method, params, id)", key), key);
+  }
+  const auto v = req.find("jsonrpc");
+  if (v == req.end() || !v->is_string() || v->get<std::string>() != "2.0")
+    return refuse("jsonrpc must be exactly \"2.0\"", "jsonrpc");
+  const auto m = req.find("method");
+  if (m == req.end() || !m->is_string()) return refuse("method must be a string", "method");
+  e.method = m->get<std::string>();
+  if (const auto p = req.find("params"); p != req.end()) {
+    if (p->is_object()) {
+      e.params = std::move(*p);
+    } else if (p->is_array() && !p->empty()) {
+      e.error = error_object(code::invalid_params, "params: this server takes parameters by name (an object)",
+                             Errc::invalid_argument, "params");
+      e.answer_error = !e.notification;
+    } else if (!p->is_array()) {
+      return refuse("params must be an object or an array", "params");
+    }
+  }
+  return e;
+}
+
+// Why `who` may not call `method`, if they may not.
+std::optional<json> refusal(const Method& method, const std::string& name, const Principal& who) {
+  if (who.role >= method.role) return std::nullopt;
+  if (who.role == Role::none)
+    return error_object(code::unauthorized,
+                        fmt::format("{} needs authentication: send a bearer token (HTTP "
+                                    "Authorization header, or auth.login with {{\"token\": "
+                                    "...}})",
+                                    name),
+                        Errc::unauthorized);
+  return error_object(Error::forbidden(name, to_text(method.role), who.name, to_text(who.role)));
+}
+
+// Runs the handler; every failure becomes the call's error object.
+template <class Finish>
+void invoke(const Method& method, Call call, Finish& finish) {
+  try {
+    Result result = method.handler(call);
+    finish(std::move(result), std::nullopt);
+  } catch (const Error& e) {
+    if (e.code() == Errc::internal) spdlog::error("rpc {}: {}", call.method, e.what());
+    finish(std::nullopt, error_object(e));
+  } catch (const json::exception& e) {
+    finish(std::nullopt, error_object(code::invalid_params, fmt::format("params: {}", e.what()),
+                                      Errc::invalid_argument, "params"));
+  } catch (const std::exception& e) {
+    spdlog::error("rpc {}: internal error: {}", call.method, e.what());
+    finish(std::nullopt, error_object(code::internal_error, fmt::format("internal error: {}", e.what())));
+  }
+}
+
+}  // namespace
+
 void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
                             std::function<void(std::optional<std::string>)> done) const {
   ++requests_;
-  const auto fail = [&](const json& id, json error) {
+  Envelope env = read_envelope(req);
+  if (env.error) {
     ++errors_;
-    done(error_response(id, std::move(error)).dump(-1, ' ', false, kInvalidUtf8));
-  };
-  if (!req.is_object()) {
-    fail(nullptr, error_object(code::invalid_request, "a request must be a JSON object",
-                               Errc::invalid_argument));
+    if (env.answer_error) done(error_response(env.id, std::move(*env.error)).dump(-1, ' ', false, kInvalidUtf8));
+    else done(std::nullopt);
     return;
-  }
-  // The id, when usable, is echoed even in errors about the rest of the request.
-  const auto id_it = req.find("id");
-  const bool is_notification = id_it == req.end();
-  json id = nullptr;
-  if (!is_notification) {
-    if (id_it->is_string() || id_it->is_number() || id_it->is_null()) id = *id_it;
-    else {
-      fail(nullptr, error_object(code::invalid_request, "id must be a string, a number or null",
-                                 Errc::invalid_argument, "id"));
-      return;
-    }
-  }
-  const auto invalid = [&](std::string_view msg, std::string_view field) {
-    // An invalid request gets an answer even without an id (spec §5: id null).
-    fail(id, error_object(code::invalid_request, msg, Errc::invalid_argument, field));
-  };
-  for (const auto& [key, value] : req.items()) {
-    (void)value;
-    if (key != "jsonrpc" && key != "method" && key != "params" && key != "id") {
-      invalid(fmt::format("unknown member '{}' (allowed: jsonrpc, method, params, id)", key), key);
-      return;
-    }
-  }
-  const auto v = req.find("jsonrpc");
-  if (v == req.end() || !v->is_string() || v->get<std::string>() != "2.0") {
-    invalid("jsonrpc must be exactly \"2.0\"", "jsonrpc");
-    return;
-  }
-  const auto m = req.find("method");
-  if (m == req.end() || !m->is_string()) {
-    invalid("method must be a string", "method");
-    return;
-  }
-  const std::string name = m->get<std::string>();
-  json params = json::object();
-  if (const auto p = req.find("params"); p != req.end()) {
-    if (p->is_object()) params = std::move(*p);
-    else if (p->is_array() && p->empty()) params = json::object();
-    else if (p->is_array()) {
-      const auto reply = [&] {
-        fail(id, error_object(code::invalid_params,
-                              "params: this server takes parameters by name (an object)",
-                              Errc::invalid_argument, "params"));
-      };
-      if (is_notification) {
-        ++errors_;
-        done(std::nullopt);
-      } else {
-        reply();
-      }
-      return;
-    } else {
-      invalid("params must be an object or an array", "params");
-      return;
-    }
   }
   // From here on, notifications get no answer whatever happens.
-  auto finish = [this, is_notification, id, done = std::move(done)](std::optional<Result> result,
-                                                       std::optional<json> error) {
+  auto finish = [this, notification = env.notification, id = env.id, done = std::move(done)](
+                    std::optional<Result> result, std::optional<json> error) {
     if (error) ++errors_;
-    if (is_notification) {
+    if (notification) {
       done(std::nullopt);
       return;
     }
     done(error ? error_response(id, std::move(*error)).dump(-1, ' ', false, kInvalidUtf8) : response_text(id, std::move(*result)));
   };
-  const auto it = methods_.find(name);
+  const auto it = methods_.find(env.method);
   if (it == methods_.end()) {
     finish(std::nullopt, error_object(code::method_not_found,
                                       fmt::format("method '{}' does not exist (rpc.discover lists "
                                                   "every method)",
-                                                  name),
+                                                  env.method),
                                       Errc::not_found, "method"));
     return;
   }
@@ -405,37 +432,14 @@ void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
     session->set_principal(anon);
     who = anon;
   }
-  if (who.role < method.role) {
-    if (who.role == Role::none)
-      finish(std::nullopt,
-             error_object(code::unauthorized,
-                          fmt::format("{} needs authentication: send a bearer token (HTTP "
-                                      "Authorization header, or auth.login with {{\"token\": "
-                                      "...}})",
-                                      name),
-                          Errc::unauthorized));
-    else
-      finish(std::nullopt, error_object(Error::forbidden(name, to_text(method.role), who.name,
-                                                         to_text(who.role))));
+  if (auto refused = refusal(method, env.method, who)) {
+    finish(std::nullopt, std::move(*refused));
     return;
   }
-  auto run = [&method, session, who = std::move(who), name, params = std::move(params),
-              finish = std::move(finish)]() mutable {
-    Call call{session, std::move(who), name, params};
-    try {
-      Result result = method.handler(call);
-      finish(std::move(result), std::nullopt);
-    } catch (const Error& e) {
-      if (e.code() == Errc::internal) spdlog::error("rpc {}: {}", name, e.what());
-      finish(std::nullopt, error_object(e));
-    } catch (const json::exception& e) {
-      finish(std::nullopt, error_object(code::invalid_params, fmt::format("params: {}", e.what()),
-                                        Errc::invalid_argument, "params"));
-    } catch (const std::exception& e) {
-      spdlog::error("rpc {}: internal error: {}", name, e.what());
-      finish(std::nullopt, error_object(code::internal_error,
-                                        fmt::format("internal error: {}", e.what())));
-    }
+  // Call holds its params by reference: they live in the closure that runs it.
+  auto run = [&method, session, who = std::move(who), name = std::move(env.method),
+              params = std::move(env.params), finish = std::move(finish)]() mutable {
+    invoke(method, Call{session, std::move(who), name, params}, finish);
   };
   if (method.control && control_) control_(std::move(run));
   else if (method.blocking && blocking_) blocking_(std::move(run));

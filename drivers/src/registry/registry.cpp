@@ -60,19 +60,38 @@ SideCheck check_scpi_serial(const nlohmann::json& c) { return check_scpi("serial
 SideCheck check_scpi_tcp(const nlohmann::json& c) { return check_scpi("tcp", c); }
 SideCheck check_scpi_usbtmc(const nlohmann::json& c) { return check_scpi("usbtmc", c); }
 
-const std::array<DriverInfo, 5> kDrivers{{
-    {"modbus", "Modbus RTU/TCP motion controllers (Oriental Motor AZ preset)", true, false, true,
-     &modbus_motion, nullptr, nullptr, &check_modbus, nullptr},
-    {"mock", "virtual lab driven by the twin (no hardware)", true, true, false,
-     &mock::make_mock_motion, &mock::make_mock_photometer, &mock::default_min_separation,
-     &check_mock_motion, &check_mock_photometer},
-    {"scpi-serial", "SCPI photometer on a serial line", false, true, true, nullptr, &scpi_serial,
-     nullptr, nullptr, &check_scpi_serial},
-    {"scpi-tcp", "SCPI photometer on a raw TCP socket", false, true, true, nullptr, &scpi_tcp,
-     nullptr, nullptr, &check_scpi_tcp},
-    {"scpi-usbtmc", "SCPI photometer over USBTMC (libusb)", false, true, true, nullptr, &scpi_usbtmc,
-     nullptr, nullptr, &check_scpi_usbtmc},
-}};
+const std::array kDrivers{
+    DriverInfo{.name = "modbus",
+               .description = "Modbus RTU/TCP motion controllers (Oriental Motor AZ preset)",
+               .motion = true,
+               .make_motion = &modbus_motion,
+               .check_motion = &check_modbus},
+    DriverInfo{.name = "mock",
+               .description = "virtual lab driven by the twin (no hardware)",
+               .motion = true,
+               .photometer = true,
+               .needs_hardware = false,
+               .make_motion = &mock::make_mock_motion,
+               .make_photometer = &mock::make_mock_photometer,
+               .default_min_separation = &mock::default_min_separation,
+               .check_motion = &check_mock_motion,
+               .check_photometer = &check_mock_photometer},
+    DriverInfo{.name = "scpi-serial",
+               .description = "SCPI photometer on a serial line",
+               .photometer = true,
+               .make_photometer = &scpi_serial,
+               .check_photometer = &check_scpi_serial},
+    DriverInfo{.name = "scpi-tcp",
+               .description = "SCPI photometer on a raw TCP socket",
+               .photometer = true,
+               .make_photometer = &scpi_tcp,
+               .check_photometer = &check_scpi_tcp},
+    DriverInfo{.name = "scpi-usbtmc",
+               .description = "SCPI photometer over USBTMC (libusb)",
+               .photometer = true,
+               .make_photometer = &scpi_usbtmc,
+               .check_photometer = &check_scpi_usbtmc},
+};
 
 std::string names() {
   std::string s;

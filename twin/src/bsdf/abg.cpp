@@ -128,13 +128,10 @@ BsdfPtr build_abg(const Params& p, const WavelengthGrid& grid) { return std::mak
 
 }  // namespace
 
-const ModelInfo& abg_model() {
-  static const ModelInfo info{"abg",
-                              {{"A", false, 1e-9, 100, false, 0.01, " sr⁻¹"},
-                               {"B", false, 1e-9, 10, false, 0.001, ""},
-                               {"g", false, 0, 4, false, 2, ""}},
-                              &build_abg};
-  return info;
-}
+const Registrar kRegistered{{"abg",
+                             {{"A", false, 1e-9, 100, false, 0.01, " sr⁻¹"},
+                              {"B", false, 1e-9, 10, false, 0.001, ""},
+                              {"g", false, 0, 4, false, 2, ""}},
+                             &build_abg}};
 
 }  // namespace gonio::twin::bsdf

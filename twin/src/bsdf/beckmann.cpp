@@ -12,9 +12,6 @@ BsdfPtr build_beckmann(const Params& p, const WavelengthGrid& grid) {
 
 }  // namespace
 
-const ModelInfo& beckmann_model() {
-  static const ModelInfo info{"beckmann", conductor_params(), &build_beckmann};
-  return info;
-}
+const Registrar kRegistered{{"beckmann", conductor_params(), &build_beckmann}};
 
 }  // namespace gonio::twin::bsdf

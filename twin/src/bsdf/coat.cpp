@@ -45,12 +45,9 @@ BsdfPtr build_coat(const Params& p, const WavelengthGrid& grid) {
 
 }  // namespace
 
-const ModelInfo& coat_model() {
-  static const ModelInfo info{"coat",
-                              {{"alpha", false, 0.001, 1, false, 0.05, ""},
-                               {"ior", false, 1, 4, false, 1.5, ""}},
-                              &build_coat};
-  return info;
-}
+const Registrar kRegistered{{"coat",
+                             {{"alpha", false, 0.001, 1, false, 0.05, ""},
+                              {"ior", false, 1, 4, false, 1.5, ""}},
+                             &build_coat}};
 
 }  // namespace gonio::twin::bsdf

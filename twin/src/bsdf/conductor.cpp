@@ -71,9 +71,6 @@ std::vector<ParamInfo> conductor_params() {
           {"k", true, 0, 20, false, 6.69, ""}};
 }
 
-const ModelInfo& conductor_model() {
-  static const ModelInfo info{"conductor", conductor_params(), &build_conductor};
-  return info;
-}
+const Registrar kRegistered{{"conductor", conductor_params(), &build_conductor}};
 
 }  // namespace gonio::twin::bsdf

@@ -129,12 +129,9 @@ BsdfPtr build_dielectric(const Params& p, const WavelengthGrid& grid) {
 
 }  // namespace
 
-const ModelInfo& dielectric_model() {
-  static const ModelInfo info{"dielectric",
-                              {{"alpha", false, 0.001, 1, false, 0.1, ""},
-                               {"ior", false, 1, 4, false, 1.5, ""}},
-                              &build_dielectric};
-  return info;
-}
+const Registrar kRegistered{{"dielectric",
+                             {{"alpha", false, 0.001, 1, false, 0.1, ""},
+                              {"ior", false, 1, 4, false, 1.5, ""}},
+                             &build_dielectric}};
 
 }  // namespace gonio::twin::bsdf

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <deque>
+#include <vector>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -127,13 +129,29 @@ double albedo_hint(const Bsdf& b, const Vec3& wo) {
   return std::isfinite(hint) && hint > 0 ? hint : 1e-3;  // never starve a lobe
 }
 
-std::span<const ModelInfo* const> models() {
-  static const std::array all{
-      &lambert_model(),    &mirror_model(),     &conductor_model(), &beckmann_model(),
-      &dielectric_model(), &oren_nayar_model(), &coat_model(),      &plastic_model(),
-      &abg_model()};
-  return all;
+namespace {
+// Filled during static initialisation, so built on first use rather than as a global whose
+// construction might come after a registrar's. A deque keeps the infos where they are.
+struct Registry {
+  std::deque<ModelInfo> infos;
+  std::vector<const ModelInfo*> by_name;
+};
+Registry& registry() {
+  static Registry r;
+  return r;
 }
+}  // namespace
+
+Registrar::Registrar(ModelInfo info) {
+  // Name order does not depend on the order the linker placed the models' files in.
+  auto& r = registry();
+  const auto* m = &r.infos.emplace_back(std::move(info));
+  r.by_name.insert(std::upper_bound(r.by_name.begin(), r.by_name.end(), m,
+                                    [](const ModelInfo* a, const ModelInfo* b) { return a->name < b->name; }),
+                   m);
+}
+
+std::span<const ModelInfo* const> models() { return registry().by_name; }
 
 const ModelInfo* find_model(std::string_view name) {
   for (const auto* m : models())

@@ -39,9 +39,6 @@ BsdfPtr build_lambert(const Params& p, const WavelengthGrid& grid) {
 
 }  // namespace
 
-const ModelInfo& lambert_model() {
-  static const ModelInfo info{"lambert", {{"albedo", true, 0, 1, false, 1.0, ""}}, &build_lambert};
-  return info;
-}
+const Registrar kRegistered{{"lambert", {{"albedo", true, 0, 1, false, 1.0, ""}}, &build_lambert}};
 
 }  // namespace gonio::twin::bsdf

@@ -37,9 +37,6 @@ BsdfPtr build_mirror(const Params& p, const WavelengthGrid& grid) {
 
 }  // namespace
 
-const ModelInfo& mirror_model() {
-  static const ModelInfo info{"mirror", {{"reflectance", true, 0, 1, false, 1.0, ""}}, &build_mirror};
-  return info;
-}
+const Registrar kRegistered{{"mirror", {{"reflectance", true, 0, 1, false, 1.0, ""}}, &build_mirror}};
 
 }  // namespace gonio::twin::bsdf

@@ -65,12 +65,9 @@ BsdfPtr build_oren_nayar(const Params& p, const WavelengthGrid& grid) {
 
 }  // namespace
 
-const ModelInfo& oren_nayar_model() {
-  static const ModelInfo info{"oren-nayar",
-                              {{"albedo", true, 0, 1, false, 0.8, ""},
-                               {"sigma", false, 0, 90, false, 20.0, " deg"}},
-                              &build_oren_nayar};
-  return info;
-}
+const Registrar kRegistered{{"oren-nayar",
+                             {{"albedo", true, 0, 1, false, 0.8, ""},
+                              {"sigma", false, 0, 90, false, 20.0, " deg"}},
+                             &build_oren_nayar}};
 
 }  // namespace gonio::twin::bsdf

@@ -176,15 +176,12 @@ BsdfPtr build_plastic(const Params& p, const WavelengthGrid& grid) {
 
 }  // namespace
 
-const ModelInfo& plastic_model() {
-  static const ModelInfo info{"plastic",
-                              {{"albedo", true, 0, 1, false, 0.5, ""},
-                               {"alpha", false, 0.001, 1, false, 0.05, ""},
-                               {"ior", false, 1, 4, false, 1.5, ""},
-                               {"haze", false, 0, 1, false, 0, ""},
-                               {"haze_alpha", false, 0.001, 1, false, 0.3, ""}},
-                              &build_plastic};
-  return info;
-}
+const Registrar kRegistered{{"plastic",
+                             {{"albedo", true, 0, 1, false, 0.5, ""},
+                              {"alpha", false, 0.001, 1, false, 0.05, ""},
+                              {"ior", false, 1, 4, false, 1.5, ""},
+                              {"haze", false, 0, 1, false, 0, ""},
+                              {"haze_alpha", false, 0.001, 1, false, 0.3, ""}},
+                             &build_plastic}};
 
 }  // namespace gonio::twin::bsdf

@@ -2,15 +2,17 @@
 //
 // The file is converted to JSON and read with json_util::ObjectReader, so a bad key or
 // value fails with the key's dotted path, the value and the allowed range
-// ("divergence.z_threshold = 0 is outside the allowed range [0.5, 100]"). Every key and its
-// default is listed in daemon/README.md; daemon/examples/ holds a file for the mock and one
-// for real hardware. Driver tables ([instrument.motion], [instrument.photometer]) are
+// ("divergence.z_threshold = 0 is outside the allowed range [0.5, 100]"). Every key is
+// described once (ConfigKey, config_keys.cpp), and daemon/README.md's key table is made from
+// those rows; daemon/examples/ holds a file for the mock and one for real hardware. Driver tables ([instrument.motion], [instrument.photometer]) are
 // handed to the driver registry as JSON, which validates them in turn.
 #pragma once
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -19,6 +21,10 @@
 
 #include "gonio/proto/enum_text.hpp"
 #include "gonio/drivers/motion/limits.hpp"
+
+namespace gonio::json_util {
+class ObjectReader;
+}
 
 namespace gonio::daemon {
 
@@ -221,6 +227,27 @@ struct Config {
   // Config::parse of its TOML text (to_toml) gives this Config back.
   nlohmann::json to_json() const;
 };
+
+// One key of the file, described once (config_keys.cpp): Config::parse reads the file by
+// these rows, to_json prints by them, and daemon/README.md's key table is made from them
+// (config_key_table; a unit test holds the README to it).
+struct ConfigKey {
+  using Reader = std::function<void(json_util::ObjectReader& section, Config& into)>;
+  // The value in effect, null when unset (a default decided at start: not printed).
+  using Writer = std::function<nlohmann::json(const Config&)>;
+  std::string_view section;  // "server", "auth.unix", "instrument.limits"
+  std::string_view name;
+  std::string_view type;     // as the README shows it: bool, integer, number, seconds, ...
+  std::string range;         // the allowed values ("1–64"); empty: any of its type
+  std::string_view default_text;  // the README's default when not the value of Config{}
+  std::string_view doc;      // Markdown, the README's "meaning"
+  Reader read;               // reads and checks the key, naming it in errors
+  Writer write;
+};
+// Every key, in the file's order: each section's keys before the sections inside it.
+std::span<const ConfigKey> config_keys();
+// The Markdown table of daemon/README.md's "Configuration" section.
+std::string config_key_table();
 
 // TOML document → JSON (tables → objects, arrays → arrays, dates → ISO strings).
 nlohmann::json toml_to_json(std::string_view toml_text, std::string_view source);

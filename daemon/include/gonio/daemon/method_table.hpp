@@ -26,50 +26,50 @@ struct MethodSpec {
 
 inline constexpr std::array kMethodTable{
     // rpc, auth
-    MethodSpec{"rpc.discover", Role::none, false},
-    MethodSpec{"auth.login", Role::none, false},
-    MethodSpec{"auth.whoami", Role::viewer, false},
-    MethodSpec{"auth.create_token", Role::admin, false},
-    MethodSpec{"auth.list_tokens", Role::admin, false},
-    MethodSpec{"auth.revoke_token", Role::admin, false},
+    MethodSpec{.name = "rpc.discover", .role = Role::none},
+    MethodSpec{.name = "auth.login", .role = Role::none},
+    MethodSpec{.name = "auth.whoami", .role = Role::viewer},
+    MethodSpec{.name = "auth.create_token", .role = Role::admin},
+    MethodSpec{.name = "auth.list_tokens", .role = Role::admin},
+    MethodSpec{.name = "auth.revoke_token", .role = Role::admin},
     // system
-    MethodSpec{"system.info", Role::viewer, false},
-    MethodSpec{"system.audit", Role::admin, false},
+    MethodSpec{.name = "system.info", .role = Role::viewer},
+    MethodSpec{.name = "system.audit", .role = Role::admin},
     // instrument
-    MethodSpec{"instrument.status", Role::viewer, false},
-    MethodSpec{"instrument.home", Role::technician, true},
-    MethodSpec{"instrument.move", Role::technician, true},
-    MethodSpec{"instrument.stop", Role::technician, false},  // inline: immediate, never queued
-    MethodSpec{"instrument.reset", Role::technician, true, true},
-    MethodSpec{"instrument.calibrate", Role::admin, true},
+    MethodSpec{.name = "instrument.status", .role = Role::viewer},
+    MethodSpec{.name = "instrument.home", .role = Role::technician, .blocking = true},
+    MethodSpec{.name = "instrument.move", .role = Role::technician, .blocking = true},
+    MethodSpec{.name = "instrument.stop", .role = Role::technician},  // inline: immediate, never queued
+    MethodSpec{.name = "instrument.reset", .role = Role::technician, .blocking = true, .control = true},
+    MethodSpec{.name = "instrument.calibrate", .role = Role::admin, .blocking = true},
     // samples
-    MethodSpec{"sample.create", Role::technician, true},
-    MethodSpec{"sample.get", Role::viewer, false},
-    MethodSpec{"sample.list", Role::viewer, false},
+    MethodSpec{.name = "sample.create", .role = Role::technician, .blocking = true},
+    MethodSpec{.name = "sample.get", .role = Role::viewer},
+    MethodSpec{.name = "sample.list", .role = Role::viewer},
     // scans
-    MethodSpec{"scan.submit", Role::technician, true},
-    MethodSpec{"scan.get", Role::viewer, false},
-    MethodSpec{"scan.list", Role::viewer, false},
-    MethodSpec{"scan.pause", Role::technician, true, true},
-    MethodSpec{"scan.resume", Role::technician, true, true},
-    MethodSpec{"scan.cancel", Role::technician, true, true},
-    MethodSpec{"scan.points", Role::viewer, false},
-    MethodSpec{"scan.export", Role::viewer, true},
-    MethodSpec{"scan.fit", Role::technician, true},
+    MethodSpec{.name = "scan.submit", .role = Role::technician, .blocking = true},
+    MethodSpec{.name = "scan.get", .role = Role::viewer},
+    MethodSpec{.name = "scan.list", .role = Role::viewer},
+    MethodSpec{.name = "scan.pause", .role = Role::technician, .blocking = true, .control = true},
+    MethodSpec{.name = "scan.resume", .role = Role::technician, .blocking = true, .control = true},
+    MethodSpec{.name = "scan.cancel", .role = Role::technician, .blocking = true, .control = true},
+    MethodSpec{.name = "scan.points", .role = Role::viewer},
+    MethodSpec{.name = "scan.export", .role = Role::viewer, .blocking = true},
+    MethodSpec{.name = "scan.fit", .role = Role::technician, .blocking = true},
     // queue
-    MethodSpec{"queue.status", Role::viewer, false},
-    MethodSpec{"queue.reorder", Role::technician, false},
+    MethodSpec{.name = "queue.status", .role = Role::viewer},
+    MethodSpec{.name = "queue.reorder", .role = Role::technician},
     // alerts
-    MethodSpec{"alert.list", Role::viewer, false},
-    MethodSpec{"alert.ack", Role::technician, false},
+    MethodSpec{.name = "alert.list", .role = Role::viewer},
+    MethodSpec{.name = "alert.ack", .role = Role::technician},
     // central archive
-    MethodSpec{"archive.status", Role::viewer, false},
-    MethodSpec{"archive.reship", Role::technician, true},
+    MethodSpec{.name = "archive.status", .role = Role::viewer},
+    MethodSpec{.name = "archive.reship", .role = Role::technician, .blocking = true},
     // twin
-    MethodSpec{"twin.predict", Role::technician, true},
+    MethodSpec{.name = "twin.predict", .role = Role::technician, .blocking = true},
     // subscriptions
-    MethodSpec{"subscribe", Role::viewer, false},
-    MethodSpec{"unsubscribe", Role::viewer, false},
+    MethodSpec{.name = "subscribe", .role = Role::viewer},
+    MethodSpec{.name = "unsubscribe", .role = Role::viewer},
 };
 
 // The entry named `name`, nullptr when the table has none.

@@ -18,6 +18,7 @@
 // (batch elements) being processed (reading pauses), and an outgoing queue bounded in
 // messages and bytes, per connection and over all of them, with a deadline on every write:
 // a peer that does not read is dropped rather than buffered (counted as a slow reader).
+// The queue and the write deadline are written once for every transport (net_session.hpp).
 // Reading also pauses while a connection has more than kReadPauseBytes waiting to go out,
 // so a client that pipelines requests without reading the answers stops being served
 // before it costs memory.
