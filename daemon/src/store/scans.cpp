@@ -43,12 +43,12 @@ Scan read_scan(const db::Stmt& s) {
   return sc;
 }
 
-std::int64_t read_id(const db::Stmt& s) { return s.i64(0); }
+std::int64_t scan_id_of(const db::Stmt& s) { return s.i64(0); }
 
 // Waiting scans in queue order (ids).
 std::vector<std::int64_t> waiting_ids(db::Connection& c) {
   return db::query(c, fmt::format("SELECT id FROM scans WHERE {} ORDER BY queue_pos, id", kWaiting),
-                   read_id);
+                   scan_id_of);
 }
 
 void renumber(db::Connection& c, const std::vector<std::int64_t>& ids) {
@@ -205,7 +205,7 @@ void Store::reorder(std::int64_t id, std::size_t position, const std::string& ac
 std::vector<std::int64_t> Store::recover_running(const std::string& reason) {
   std::lock_guard lock(write_mu_);
   db::Transaction t(*writer_);
-  const auto ids = db::query(*writer_, "SELECT id FROM scans WHERE state = 'running'", read_id);
+  const auto ids = db::query(*writer_, "SELECT id FROM scans WHERE state = 'running'", scan_id_of);
   for (auto id : ids) {
     db::execute(*writer_, "UPDATE scans SET state = 'interrupted', reason = ? WHERE id = ?",
                 reason, id);
