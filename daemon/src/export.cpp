@@ -1,11 +1,6 @@
 // Scan export to CSV, JSON, IS-SA and SSDD (see export.hpp).
 #include "gonio/daemon/export.hpp"
 
-#include <algorithm>
-#include <cmath>
-#include <map>
-#include <numbers>
-#include <set>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -14,6 +9,7 @@
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/bsdf_io.hpp"
 #include "gonio/twin/color.hpp"
+#include "gonio/twin/in_plane.hpp"
 #include "gonio/twin/tabulated.hpp"
 
 namespace gonio::daemon {
@@ -57,56 +53,11 @@ std::string to_csv(const Scan& scan, const std::vector<PointRecord>& points, boo
 // The measured BRDF on an isotropic spherical grid.
 twin::BsdfTable to_table(const Scan& scan, const std::vector<PointRecord>& points) {
   if (points.empty()) throw Error(Errc::unsupported, "the scan has no measured point to export");
-  std::set<double> ti, to, sides;
-  // (θi, θo, φo) → sum of f per channel and count.
-  std::map<std::array<double, 3>, std::pair<std::vector<double>, int>> cells;
-  const std::size_t channels = points.front().measured.size();
-  for (const auto& p : points) {
-    const auto& g = p.planned;
-    if (!g.in_measurement_plane() || g.is_transmission())
-      throw Error(Errc::unsupported,
-                  fmt::format("point {} ({}) is not an in-plane reflection geometry; export csv "
-                              "or json",
-                              p.index, g.to_string()));
-    const double theta_o = std::abs(g.theta_r);
-    std::vector<double> sides_here;
-    if (g.theta_r > 0) sides_here = {180.0};
-    else if (g.theta_r < 0) sides_here = {0.0};
-    else sides_here = {0.0, 180.0};  // the normal lies on both sides
-    ti.insert(g.theta_i);
-    to.insert(theta_o);
-    for (double side : sides_here) {
-      sides.insert(side);
-      auto& cell = cells[{g.theta_i, theta_o, side}];
-      if (cell.first.empty()) cell.first.assign(channels, 0.0);
-      for (std::size_t c = 0; c < channels; ++c)
-        cell.first[c] += std::max(0.0, p.measured.values[c]) / std::numbers::pi;
-      ++cell.second;
-    }
-  }
-  const std::vector<double> p0(ti.begin(), ti.end()), p2(to.begin(), to.end()),
-      p3(sides.begin(), sides.end());
-  std::vector<double> values(p0.size() * p2.size() * p3.size() * channels);
-  for (std::size_t i3 = 0; i3 < p3.size(); ++i3)
-    for (std::size_t i2 = 0; i2 < p2.size(); ++i2)
-      for (std::size_t i0 = 0; i0 < p0.size(); ++i0) {
-        const auto it = cells.find({p0[i0], p2[i2], p3[i3]});
-        if (it == cells.end())
-          throw Error(Errc::unsupported,
-                      fmt::format("the scan is not a full grid: no point at θi = {:g}°, θr = "
-                                  "{:g}°; export csv or json",
-                                  p0[i0], p3[i3] > 90 ? p2[i2] : -p2[i2]));
-        const std::size_t base = ((i3 * p2.size() + i2) * p0.size() + i0) * channels;
-        for (std::size_t c = 0; c < channels; ++c)
-          values[base + c] = it->second.first[c] / it->second.second;
-      }
-  twin::BsdfTable::Axes axes;
-  axes.p0 = p0;
-  axes.p2 = p2;
-  axes.p3 = p3;
-  return twin::BsdfTable(twin::TableParam::spherical, std::move(axes),
-                         scan.plan.wavelengths.values(), std::move(values),
-                         twin::TableReduction{true, false});
+  std::vector<twin::InPlaneReading> readings;
+  readings.reserve(points.size());
+  for (const auto& p : points) readings.push_back({p.planned, p.measured.values, p.index});
+  return twin::in_plane_table(readings, scan.plan.wavelengths.values(),
+                              {.what = "the scan", .remedy = "export csv or json", .field = {}});
 }
 
 }  // namespace

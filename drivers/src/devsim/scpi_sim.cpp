@@ -160,11 +160,6 @@ std::chrono::milliseconds ScpiSimDevice::take_reply_delay() {
   return std::exchange(reply_delay_, std::chrono::milliseconds(0));
 }
 
-std::size_t ScpiSimDevice::commands_handled() const {
-  std::lock_guard lock(mu_);
-  return handled_;
-}
-
 void ScpiSimDevice::push_error(int code, std::string_view text) {
   if (errors_.size() >= 10) {  // SCPI-1999 Vol. 2 §21.8.2: the last entry becomes -350
     errors_.back() = {-350, "Queue overflow"};
@@ -181,7 +176,6 @@ std::string ScpiSimDevice::handle(std::string_view message) {
     const auto semi = message.find(';', start);
     const auto cmd = trim(message.substr(start, semi - start));
     if (!cmd.empty()) {
-      ++handled_;
       try {
         auto r = execute(cmd);
         if (!r.empty()) response += (response.empty() ? "" : ";") + r;

@@ -79,7 +79,6 @@ void Session::resync(Deadline deadline) {
         --markers_;
         continue;
       }
-      ++dropped_;
       spdlog::debug("{}: dropped a late reply while resynchronising: '{}'", t_->describe(),
                     line.substr(0, 80));
       if (++dropped > kMaxDroppedLines)

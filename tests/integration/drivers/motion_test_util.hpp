@@ -14,6 +14,7 @@
 #include "gonio/drivers/motion/guarded_motion.hpp"
 #include "gonio/drivers/motion/limits.hpp"
 #include "gonio/proto/error.hpp"
+#include "gonio/test/error_of.hpp"
 
 namespace motion_test {
 
@@ -77,14 +78,7 @@ inline json rtu_link(const std::string& device) {
   return json{{"type", "rtu"}, {"device", device}, {"baud", 115200}, {"format", "8E1"}};
 }
 
-inline gonio::Error error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const gonio::Error& e) {
-    return e;
-  }
-  return gonio::Error(gonio::Errc::internal, "no error thrown");
-}
+using gonio::test::error_of;
 
 inline bool mentions(const gonio::Error& e, const std::string& s) {
   return std::string(e.what()).find(s) != std::string::npos;

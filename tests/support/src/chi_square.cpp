@@ -2,7 +2,9 @@
 // Stegun 6.5.29 and 6.5.31), the fraction evaluated by the modified Lentz method.
 #include "gonio/test/chi_square.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace gonio::test {
 
@@ -38,5 +40,38 @@ double gamma_q(double a, double x) {
 }
 
 double chi2_sf(double x, double dof) { return gamma_q(dof / 2, x / 2); }
+
+Pearson pearson(const std::vector<double>& observed, const std::vector<double>& expected) {
+  Pearson r;
+  double pool_obs = 0, pool_exp = 0, worst = -1;
+  int cells = 0;
+  for (std::size_t k = 0; k < expected.size(); ++k) {
+    if (expected[k] < 5) {
+      pool_obs += observed[k];
+      pool_exp += expected[k];
+      continue;
+    }
+    const double d = observed[k] - expected[k];
+    const double c = d * d / expected[k];
+    if (c > worst) {
+      worst = c;
+      r.worst = "cell " + std::to_string(k) + ": observed " + std::to_string(observed[k]) +
+                ", expected " + std::to_string(expected[k]);
+    }
+    r.statistic += c;
+    ++cells;
+  }
+  if (pool_exp > 0) {
+    const double d = pool_obs - pool_exp;
+    r.statistic += d * d / pool_exp;
+    ++cells;
+  } else if (pool_obs > 0) {
+    r.statistic = std::numeric_limits<double>::infinity();
+    r.worst = "draws where the pdf integrates to zero";
+  }
+  r.dof = std::max(1, cells - 1);
+  r.p_value = chi2_sf(r.statistic, r.dof);
+  return r;
+}
 
 }  // namespace gonio::test

@@ -7,23 +7,16 @@
 
 #include "gonio/drivers/motion/collision.hpp"
 #include "gonio/proto/error.hpp"
+#include "gonio/test/error_of.hpp"
 
 using gonio::Errc;
 using gonio::Error;
+using gonio::test::error_of;
 using gonio::drivers::Axis;
 using gonio::drivers::MotionGuard;
 using gonio::drivers::SoftLimits;
 
 namespace {
-
-Error error_of(auto&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e;
-  }
-  return Error(Errc::internal, "no error thrown");
-}
 
 bool contains(const Error& e, const std::string& s) {
   return std::string(e.what()).find(s) != std::string::npos;

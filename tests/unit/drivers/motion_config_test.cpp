@@ -7,6 +7,7 @@
 
 #include "gonio/drivers/modbus/modbus_motion.hpp"
 #include "gonio/proto/error.hpp"
+#include "gonio/test/error_of.hpp"
 
 namespace mb = gonio::drivers::modbus;
 using gonio::Errc;
@@ -32,12 +33,7 @@ json base() {
 }
 
 Error error_of(const json& j) {
-  try {
-    mb::MotionConfig::from_json(j);
-  } catch (const Error& e) {
-    return e;
-  }
-  return Error(Errc::internal, "no error thrown");
+  return gonio::test::error_of([&] { mb::MotionConfig::from_json(j); });
 }
 
 }  // namespace

@@ -13,9 +13,11 @@
 #include "gonio/drivers/motion/guarded_motion.hpp"
 #include "gonio/drivers/motion/limits.hpp"
 #include "gonio/proto/error.hpp"
+#include "gonio/test/error_of.hpp"
 
 using gonio::Errc;
 using gonio::Error;
+using gonio::test::error_of;
 using gonio::drivers::Axis;
 using gonio::drivers::AxisStatus;
 using gonio::drivers::GuardedMotion;
@@ -81,15 +83,6 @@ Rig make(const MotionLimits& limits, double default_sep = 0,
   auto fake = std::make_unique<FakeMotion>(std::move(axes));
   auto* raw = fake.get();
   return {raw, std::make_unique<GuardedMotion>(std::move(fake), limits.guard(default_sep))};
-}
-
-Error error_of(auto&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e;
-  }
-  return Error(Errc::internal, "no error thrown");
 }
 
 bool contains(const Error& e, const std::string& s) {

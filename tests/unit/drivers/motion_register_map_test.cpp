@@ -10,24 +10,13 @@
 #include "gonio/drivers/modbus/register_map.hpp"
 #include "gonio/drivers/modbus/rtu_frame.hpp"
 #include "gonio/proto/error.hpp"
+#include "gonio/test/error_of.hpp"
 
 namespace mb = gonio::drivers::modbus;
 using gonio::Errc;
 using gonio::Error;
+using gonio::test::error_of;
 using nlohmann::json;
-
-namespace {
-
-Error error_of(auto&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e;
-  }
-  return Error(Errc::internal, "no error thrown");
-}
-
-}  // namespace
 
 TEST(MotionRegisterEncoding, UpperWordFirst) {
   EXPECT_EQ(mb::encode_u32(0x12345678u, mb::WordOrder::high_first),

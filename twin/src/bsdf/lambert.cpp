@@ -17,15 +17,9 @@ class Lambert final : public Lobe {
     for (std::size_t c = 0; c < out.size(); ++c) out[c] = lit ? albedo_[c] * kInvPi : 0.0;
   }
   std::optional<BsdfSample> sample_wi(const Vec3& wo, double, Vec2 u) const override {
-    if (wo.z == 0) return std::nullopt;
-    Vec3 wi = sample_cosine_hemisphere(u);
-    if (wi.z <= 0) return std::nullopt;
-    if (wo.z < 0) wi = flip_z(wi);
-    return BsdfSample{wi, pdf(wo, wi)};
+    return sample_cosine(wo, u);
   }
-  double pdf(const Vec3& wo, const Vec3& wi) const override {
-    return same_hemisphere(wi, wo) ? abs_cos_theta(wi) * kInvPi : 0.0;
-  }
+  double pdf(const Vec3& wo, const Vec3& wi) const override { return cosine_pdf(wo, wi); }
   double albedo_hint(const Vec3&) const override { return mean_; }
 
  private:

@@ -1,10 +1,12 @@
-// Small sampling helpers shared by the analytic models: cosine-weighted hemisphere,
-// inverse error function.
+// Small sampling helpers shared by the analytic models: cosine-weighted hemisphere (and
+// the diffuse models' sampler built on it), inverse error function.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
+#include "gonio/twin/bsdf.hpp"
 #include "gonio/twin/vec.hpp"
 
 namespace gonio::twin::bsdf {
@@ -51,5 +53,20 @@ inline Vec3 sample_cosine_hemisphere(Vec2 u) noexcept {
 // Mirror of w through the sample plane (z → −z): reflection models are two-sided, and
 // each evaluates in the hemisphere of wo after this flip.
 constexpr Vec3 flip_z(const Vec3& w) noexcept { return {w.x, w.y, -w.z}; }
+
+// Density of a cosine-weighted wi in the hemisphere of wo: |cos θi| / π, zero across it.
+inline double cosine_pdf(const Vec3& wo, const Vec3& wi) noexcept {
+  return same_hemisphere(wi, wo) ? abs_cos_theta(wi) * kInvPi : 0.0;
+}
+
+// A cosine-weighted wi in the hemisphere of wo, the sampler of the diffuse models (lambert,
+// oren-nayar); none at grazing wo or on the disk's rim.
+inline std::optional<BsdfSample> sample_cosine(const Vec3& wo, Vec2 u) noexcept {
+  if (wo.z == 0) return std::nullopt;
+  Vec3 wi = sample_cosine_hemisphere(u);
+  if (wi.z <= 0) return std::nullopt;
+  if (wo.z < 0) wi = flip_z(wi);
+  return BsdfSample{wi, cosine_pdf(wo, wi)};
+}
 
 }  // namespace gonio::twin::bsdf

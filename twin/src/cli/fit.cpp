@@ -4,9 +4,7 @@
 #include <fstream>
 #include <iostream>
 #include <algorithm>
-#include <array>
 #include <map>
-#include <set>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -17,6 +15,7 @@
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/bsdf_io.hpp"
 #include "gonio/twin/color.hpp"
+#include "gonio/twin/in_plane.hpp"
 #include "gonio/twin/plot.hpp"
 
 namespace gonio::twin::cli {
@@ -241,57 +240,16 @@ void write_corrected_csv(const std::string& path, const std::vector<CorrectedPoi
   if (!out) throw Error(Errc::io_error, fmt::format("cannot write '{}'", path), "corrected");
 }
 
-// The corrected values as an isotropic spherical BRDF table (f = β/π): θi and |θr| nodes of
-// the in-plane reflection points, φo = 0 (θr < 0) and 180 (θr > 0), repeats averaged. The
-// points must fill the grid, as for goniod's tabulated exports.
+// The corrected values as an isotropic spherical BRDF table (in_plane.hpp). The points must
+// fill the grid, as for goniod's tabulated exports.
 BsdfTable corrected_table(const std::vector<CorrectedPoint>& points, const WavelengthGrid& grid) {
-  std::set<double> ti, to, sides;
-  std::map<std::array<double, 3>, std::pair<std::vector<double>, int>> cells;
-  for (const auto& p : points) {
-    const auto& g = p.geometry;
-    if (!g.in_measurement_plane() || g.is_transmission())
-      throw Error(Errc::unsupported,
-                  fmt::format("{} is not an in-plane reflection geometry: write the corrected "
-                              "table as .csv", g.to_string()),
-                  "corrected");
-    std::vector<double> here;
-    if (g.theta_r > 0) here = {180.0};
-    else if (g.theta_r < 0) here = {0.0};
-    else here = {0.0, 180.0};
-    ti.insert(g.theta_i);
-    to.insert(std::abs(g.theta_r));
-    for (double side : here) {
-      sides.insert(side);
-      auto& cell = cells[{g.theta_i, std::abs(g.theta_r), side}];
-      if (cell.first.empty()) cell.first.assign(grid.size(), 0.0);
-      for (std::size_t c = 0; c < grid.size(); ++c)
-        cell.first[c] += std::max(0.0, p.corrected[c]) / kPi;
-      ++cell.second;
-    }
-  }
-  const std::vector<double> p0(ti.begin(), ti.end()), p2(to.begin(), to.end()),
-      p3(sides.begin(), sides.end());
-  std::vector<double> values(p0.size() * p2.size() * p3.size() * grid.size());
-  for (std::size_t i3 = 0; i3 < p3.size(); ++i3)
-    for (std::size_t i2 = 0; i2 < p2.size(); ++i2)
-      for (std::size_t i0 = 0; i0 < p0.size(); ++i0) {
-        const auto it = cells.find({p0[i0], p2[i2], p3[i3]});
-        if (it == cells.end())
-          throw Error(Errc::unsupported,
-                      fmt::format("the points are not a full grid: none at θi = {:g}°, θr = "
-                                  "{:g}°; write the corrected table as .csv",
-                                  p0[i0], p3[i3] > 90 ? p2[i2] : -p2[i2]),
-                      "corrected");
-        const std::size_t base = ((i3 * p2.size() + i2) * p0.size() + i0) * grid.size();
-        for (std::size_t c = 0; c < grid.size(); ++c)
-          values[base + c] = it->second.first[c] / it->second.second;
-      }
-  BsdfTable::Axes axes;
-  axes.p0 = p0;
-  axes.p2 = p2;
-  axes.p3 = p3;
-  return BsdfTable(TableParam::spherical, std::move(axes), grid.values(), std::move(values),
-                   TableReduction{true, false});
+  std::vector<InPlaneReading> readings;
+  readings.reserve(points.size());
+  for (const auto& p : points) readings.push_back({p.geometry, p.corrected});
+  return in_plane_table(readings, grid.values(),
+                        {.what = "the points",
+                         .remedy = "write the corrected table as .csv",
+                         .field = "corrected"});
 }
 
 void write_corrected(const std::string& path, const std::vector<CorrectedPoint>& points,

@@ -322,28 +322,13 @@ const std::vector<std::string>& calibration_parameters() {
   return names;
 }
 
-FitResult calibrate(const MeasuredData& data, std::string_view sample_spec,
-                    const std::vector<std::string>& names, const InstrumentProfile& profile,
-                    const FitOptions& options) {
-  const auto start = Clock::now();
-  options.validate();
-  profile.validate();
-  check_grid(data);
-  if (names.empty()) throw Error::invalid("fit", "name at least one instrument parameter to fit");
-  if (data.exact_directions)
-    throw Error(Errc::unsupported,
-                fmt::format("{} holds f at exact directions (a table), not readings of this "
-                            "instrument: there is nothing to calibrate against", data.source),
-                "measured");
-  const auto& grid = data.wavelengths;
-  const auto sample = make_bsdf(sample_spec, grid);
-  const auto reference = make_bsdf(profile.reference_bsdf, grid);
-  const auto geo = distinct_geometries(data);
-  const auto est = options.estimator_options();
+namespace {
 
-  auto problem = base_problem(data);
+// The named calibration parameters appended to `problem`, each starting at the profile's
+// value, kept just inside its range.
+std::vector<CalParam> add_cal_parameters(fit::Problem& problem, const std::vector<std::string>& names,
+                                         const InstrumentProfile& profile) {
   std::vector<CalParam> ids;
-  bool tilt = false;
   for (std::size_t j = 0; j < names.size(); ++j) {
     const auto it = std::find_if(cal_table().begin(), cal_table().end(),
                                  [&](const CalInfo& c) { return names[j] == c.name; });
@@ -365,8 +350,75 @@ FitResult calibrate(const MeasuredData& data, std::string_view sample_spec,
     problem.params.push_back({it->name, s, it->lo, it->hi, it->log});
     problem.channel.push_back(-1);
     problem.group.push_back(static_cast<int>(j));
-    tilt = tilt || it->id == CalParam::sample_tilt;
   }
+  return ids;
+}
+
+// A calibration's result as such, with the profile it makes; returns the fitted values.
+CalValues describe_calibration(FitResult& r, const MeasuredData& data, const Bsdf& sample,
+                               const InstrumentProfile& profile, const std::vector<CalParam>& ids) {
+  r.kind = "calibrate";
+  r.spec = sample.spec();
+  r.points = data.points.size();
+  r.residuals = data.residuals();
+  std::vector<double> x;
+  for (const auto& p : r.parameters) x.push_back(p.value);
+  const auto v = cal_values(profile, ids, x);
+  r.profile = corrected_profile(profile, v);
+  return v;
+}
+
+// Naive: an ideal instrument (no apertures, no footprints) with the arms where they are.
+FitResult naive_calibration(fit::Problem np, const MeasuredData& data, const Bsdf& sample,
+                            const InstrumentProfile& profile, const std::vector<CalParam>& ids,
+                            const FitOptions& options) {
+  const auto t0 = Clock::now();
+  np.evaluate = [&](const std::vector<double>& x, std::vector<double>& beta,
+                    std::vector<double>& se) {
+    const auto v = cal_values(profile, ids, x);
+    beta.clear();
+    for (const auto& pt : data.points) {
+      const auto& g = pt.geometry;
+      const Geometry actual{g.theta_i + v.incidence_offset + v.tilt, g.phi_i,
+                            g.theta_r + v.receive_offset - v.tilt, g.phi_r};
+      auto b = nominal_beta(sample, actual);
+      // A tilted sample intercepts the whole beam; its radiance is seen at θr − τ.
+      const double c0 = std::cos((g.theta_r + v.receive_offset) * kDegToRad);
+      const double ratio = c0 != 0 ? std::cos(actual.theta_r * kDegToRad) / c0 : 1.0;
+      for (double& x_ : b) beta.push_back(x_ * v.gain * profile.reference_beta * ratio);
+    }
+    se.assign(beta.size(), 0.0);
+  };
+  auto r = fit::solve(np, options);
+  describe_calibration(r, data, sample, profile, ids);
+  r.seconds = seconds_since(t0);
+  return r;
+}
+
+}  // namespace
+
+FitResult calibrate(const MeasuredData& data, std::string_view sample_spec,
+                    const std::vector<std::string>& names, const InstrumentProfile& profile,
+                    const FitOptions& options) {
+  const auto start = Clock::now();
+  options.validate();
+  profile.validate();
+  check_grid(data);
+  if (names.empty()) throw Error::invalid("fit", "name at least one instrument parameter to fit");
+  if (data.exact_directions)
+    throw Error(Errc::unsupported,
+                fmt::format("{} holds f at exact directions (a table), not readings of this "
+                            "instrument: there is nothing to calibrate against", data.source),
+                "measured");
+  const auto& grid = data.wavelengths;
+  const auto sample = make_bsdf(sample_spec, grid);
+  const auto reference = make_bsdf(profile.reference_bsdf, grid);
+  const auto geo = distinct_geometries(data);
+  const auto est = options.estimator_options();
+
+  auto problem = base_problem(data);
+  const auto ids = add_cal_parameters(problem, names, profile);
+  const bool tilt = std::find(ids.begin(), ids.end(), CalParam::sample_tilt) != ids.end();
   if (tilt)
     for (const auto& g : geo.unique)
       if (!g.in_measurement_plane())
@@ -376,38 +428,8 @@ FitResult calibrate(const MeasuredData& data, std::string_view sample_spec,
                     "fit");
 
   const auto fixed = profile.calibration.mode == CalibrationMode::fixed;
-  // Naive: an ideal instrument (no apertures, no footprints) with the arms where they are.
   std::vector<FitResult> naive;
-  if (options.naive) {
-    const auto t0 = Clock::now();
-    auto np = problem;
-    np.evaluate = [&](const std::vector<double>& x, std::vector<double>& beta,
-                      std::vector<double>& se) {
-      const auto v = cal_values(profile, ids, x);
-      beta.clear();
-      for (const auto& pt : data.points) {
-        const auto& g = pt.geometry;
-        const Geometry actual{g.theta_i + v.incidence_offset + v.tilt, g.phi_i,
-                              g.theta_r + v.receive_offset - v.tilt, g.phi_r};
-        auto b = nominal_beta(*sample, actual);
-        // A tilted sample intercepts the whole beam; its radiance is seen at θr − τ.
-        const double c0 = std::cos((g.theta_r + v.receive_offset) * kDegToRad);
-        const double ratio = c0 != 0 ? std::cos(actual.theta_r * kDegToRad) / c0 : 1.0;
-        for (double& x_ : b) beta.push_back(x_ * v.gain * profile.reference_beta * ratio);
-      }
-      se.assign(beta.size(), 0.0);
-    };
-    auto r = fit::solve(np, options);
-    r.kind = "calibrate";
-    r.spec = sample->spec();
-    r.points = data.points.size();
-    r.residuals = data.residuals();
-    std::vector<double> x;
-    for (const auto& p : r.parameters) x.push_back(p.value);
-    r.profile = corrected_profile(profile, cal_values(profile, ids, x));
-    r.seconds = seconds_since(t0);
-    naive.push_back(std::move(r));
-  }
+  if (options.naive) naive.push_back(naive_calibration(problem, data, *sample, profile, ids, options));
 
   problem.evaluate = [&](const std::vector<double>& x, std::vector<double>& beta,
                          std::vector<double>& se) {
@@ -437,14 +459,7 @@ FitResult calibrate(const MeasuredData& data, std::string_view sample_spec,
   auto r = fit::solve(problem, options, &at);
   r.misfit = fit::misfit_regions(data, at);
   if (r.chi2_per_dof > options.misfit_limit) r.warnings.insert(r.warnings.begin(), fit::misfit_warning(r));
-  r.kind = "calibrate";
-  r.spec = sample->spec();
-  r.points = data.points.size();
-  r.residuals = data.residuals();
-  std::vector<double> x;
-  for (const auto& p : r.parameters) x.push_back(p.value);
-  const auto v = cal_values(profile, ids, x);
-  r.profile = corrected_profile(profile, v);
+  const auto v = describe_calibration(r, data, *sample, profile, ids);
   if (tilt)
     r.warnings.push_back(fmt::format("the sample tilt ({:.3g}°) belongs to this mounting of the "
                                      "sample, not to the instrument: it is not in the profile",

@@ -286,6 +286,141 @@ void bound_warnings(const std::vector<FittedParameter>& params, const std::vecto
                                 marks[k], counts[k].first, counts[k].second, example[k]));
 }
 
+// Covariance (JᵀJ)⁻¹ through the unit-diagonal information matrix N = D⁻¹JᵀJD⁻¹, whose
+// small eigenvalues are the directions the data do not constrain.
+struct Information {
+  Eigen::VectorXd d;       // D: the square roots of JᵀJ's diagonal
+  Eigen::VectorXd lambda;  // N's eigenvalues, ascending
+  Eigen::MatrixXd V;       // and eigenvectors
+  Eigen::MatrixXd cov;     // scaled by max(1, χ²/dof)
+  std::vector<bool> flat;  // parameters in a flat direction (or with no information)
+};
+
+Information information(const Eigen::MatrixXd& J, double chi2_per_dof) {
+  const std::size_t n = static_cast<std::size_t>(J.cols());
+  Information in;
+  const Eigen::MatrixXd info = J.transpose() * J;
+  auto& d = in.d;
+  d.resize(J.cols());
+  for (Eigen::Index j = 0; j < d.size(); ++j) d(j) = info(j, j) > 0 ? std::sqrt(info(j, j)) : 0;
+  Eigen::MatrixXd N = Eigen::MatrixXd::Identity(d.size(), d.size());
+  for (Eigen::Index a = 0; a < d.size(); ++a)
+    for (Eigen::Index b = 0; b < d.size(); ++b)
+      if (d(a) > 0 && d(b) > 0) N(a, b) = info(a, b) / (d(a) * d(b));
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(N);
+  in.lambda = eig.eigenvalues();
+  in.V = eig.eigenvectors();
+  constexpr double kFlat = 1e-9;
+  Eigen::MatrixXd Ninv = Eigen::MatrixXd::Zero(d.size(), d.size());
+  in.flat.assign(n, false);
+  for (Eigen::Index k = 0; k < in.lambda.size(); ++k) {
+    if (in.lambda(k) > kFlat * static_cast<double>(n)) {
+      Ninv += in.V.col(k) * in.V.col(k).transpose() / in.lambda(k);
+    } else {
+      for (Eigen::Index j = 0; j < d.size(); ++j)
+        if (std::abs(in.V(j, k)) > 0.1) in.flat[static_cast<std::size_t>(j)] = true;
+    }
+  }
+  for (std::size_t j = 0; j < n; ++j)
+    if (d(static_cast<Eigen::Index>(j)) == 0) in.flat[j] = true;
+  const double scale = std::max(1.0, chi2_per_dof);
+  in.cov = Eigen::MatrixXd::Zero(d.size(), d.size());
+  for (Eigen::Index a = 0; a < d.size(); ++a)
+    for (Eigen::Index b = 0; b < d.size(); ++b)
+      if (d(a) > 0 && d(b) > 0) in.cov(a, b) = scale * Ninv(a, b) / (d(a) * d(b));
+  return in;
+}
+
+std::vector<std::vector<double>> correlation_of(const Eigen::MatrixXd& cov) {
+  const auto n = static_cast<std::size_t>(cov.rows());
+  std::vector<std::vector<double>> rho(n, std::vector<double>(n, 0.0));
+  for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t b = 0; b < n; ++b) {
+      const auto A = static_cast<Eigen::Index>(a), B = static_cast<Eigen::Index>(b);
+      const double den = std::sqrt(cov(A, A) * cov(B, B));
+      rho[a][b] = a == b ? 1.0 : (den > 0 ? cov(A, B) / den : 0.0);
+    }
+  }
+  return rho;
+}
+
+// χ² at the optimum (and, for `at`, the values and normalised residuals there).
+double chi2_at(const Evaluator::State& state, const Problem& problem, Optimum* at) {
+  const std::size_t m = state.beta.size();
+  double chi2 = 0;
+  for (std::size_t i = 0; i < m; ++i) {
+    const double z = (state.beta[i] - problem.measured[i]) / state.sigma[i];
+    chi2 += z * z;
+  }
+  if (at != nullptr) {
+    at->beta = state.beta;
+    at->z.resize(m);
+    for (std::size_t i = 0; i < m; ++i)
+      at->z[i] = (state.beta[i] - problem.measured[i]) / state.sigma[i];
+  }
+  return chi2;
+}
+
+// Each parameter's value, uncertainty and flags; a warning for each one not identifiable.
+void add_parameters(const Problem& problem, const std::vector<double>& x, const Eigen::VectorXd& y,
+                    const Information& in, FitResult& r) {
+  for (std::size_t j = 0; j < x.size(); ++j) {
+    const auto& p = problem.params[j];
+    FittedParameter fp;
+    fp.name = p.name;
+    fp.value = x[j];
+    fp.start = p.start, fp.lo = p.lo, fp.hi = p.hi;
+    // Within half a percent of the range (in the fitting coordinate, log for log-scale
+    // parameters) of a bound: the optimiser may stop just short of the bound it is
+    // pressing against, and such a value is no estimate either.
+    const double t = 0.5 * (1 + std::sin(y(static_cast<Eigen::Index>(j))));
+    fp.at_bound = t < kBoundMargin || t > 1 - kBoundMargin;
+    fp.identifiable = !in.flat[j];
+    const double var = in.cov(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j));
+    fp.u = in.flat[j] ? std::numeric_limits<double>::quiet_NaN() : std::sqrt(var);
+    if (in.flat[j])
+      r.warnings.push_back(fmt::format("{} is not identifiable: the data do not constrain it "
+                                       "(a flat direction of chi2)", p.name));
+    r.parameters.push_back(fp);
+  }
+}
+
+// Pairs correlated beyond options.correlation_limit are not identifiable either.
+void correlation_warnings(const Problem& problem, const Information& in, double limit,
+                          FitResult& r) {
+  const std::size_t n = r.parameters.size();
+  for (std::size_t a = 0; a < n; ++a)
+    for (std::size_t b = a + 1; b < n; ++b)
+      if (std::abs(r.correlation[a][b]) > limit && !in.flat[a] && !in.flat[b]) {
+        r.parameters[a].identifiable = r.parameters[b].identifiable = false;
+        r.warnings.push_back(fmt::format("{} and {} are correlated (rho = {:.3f}): the data "
+                                         "hardly separate them", problem.params[a].name,
+                                         problem.params[b].name, r.correlation[a][b]));
+      }
+}
+
+// Directions along which χ² hardly changes, in parameters scaled by their information.
+void add_degeneracies(const Problem& problem, const Information& in, double limit, FitResult& r) {
+  const std::size_t n = r.parameters.size();
+  for (Eigen::Index k = 0; k < in.lambda.size(); ++k) {
+    if (in.lambda(k) >= 1 - limit || n < 2) continue;
+    Degeneracy dg;
+    dg.eigenvalue = std::max(0.0, in.lambda(k));
+    for (Eigen::Index j = 0; j < in.d.size(); ++j)
+      if (std::abs(in.V(j, k)) > 0.05)
+        dg.combination.emplace_back(problem.params[static_cast<std::size_t>(j)].name, in.V(j, k));
+    if (dg.combination.size() >= 2) {
+      std::string text;
+      for (const auto& [name, c] : dg.combination)
+        text += fmt::format("{}{:+.2f}·{}", text.empty() ? "" : " ", c, name);
+      r.warnings.push_back(fmt::format("the data cannot separate the combination {} "
+                                       "(eigenvalue {:.2g} of the normalised information)",
+                                       text, dg.eigenvalue));
+    }
+    r.degenerate.push_back(std::move(dg));
+  }
+}
+
 }  // namespace
 
 FitResult solve(const Problem& problem, const FitOptions& options, Optimum* at) {
@@ -315,116 +450,22 @@ FitResult solve(const Problem& problem, const FitOptions& options, Optimum* at) 
   // The optimum in x, its χ², and the Jacobian there.
   std::vector<double> x(n);
   for (std::size_t j = 0; j < n; ++j) x[j] = ev.bounds()[j].to_x(y(static_cast<Eigen::Index>(j)));
-  const auto state = ev.at(x);
-  double chi2 = 0;
-  for (std::size_t i = 0; i < m; ++i) {
-    const double z = (state.beta[i] - problem.measured[i]) / state.sigma[i];
-    chi2 += z * z;
-  }
-  if (at != nullptr) {
-    at->beta = state.beta;
-    at->z.resize(m);
-    for (std::size_t i = 0; i < m; ++i)
-      at->z[i] = (state.beta[i] - problem.measured[i]) / state.sigma[i];
-  }
-  r.chi2 = chi2;
+  r.chi2 = chi2_at(ev.at(x), problem, at);
   r.dof = static_cast<long>(m) - static_cast<long>(n);
-  r.chi2_per_dof = chi2 / static_cast<double>(r.dof);
+  r.chi2_per_dof = r.chi2 / static_cast<double>(r.dof);
   // The optimiser's last Jacobian is reused when it was taken at the optimum.
   const Eigen::MatrixXd J =
       functor.last_x == x ? functor.last_jx : ev.jacobian(x, std::vector<double>(n, 1.0));
   r.evaluations = ev.evaluations();
 
-  // Covariance (JᵀJ)⁻¹ through the unit-diagonal information matrix N = D⁻¹JᵀJD⁻¹, whose
-  // small eigenvalues are the directions the data do not constrain.
-  const Eigen::MatrixXd info = J.transpose() * J;
-  Eigen::VectorXd d(static_cast<Eigen::Index>(n));
-  for (Eigen::Index j = 0; j < d.size(); ++j) d(j) = info(j, j) > 0 ? std::sqrt(info(j, j)) : 0;
-  Eigen::MatrixXd N = Eigen::MatrixXd::Identity(d.size(), d.size());
-  for (Eigen::Index a = 0; a < d.size(); ++a)
-    for (Eigen::Index b = 0; b < d.size(); ++b)
-      if (d(a) > 0 && d(b) > 0) N(a, b) = info(a, b) / (d(a) * d(b));
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(N);
-  const Eigen::VectorXd lambda = eig.eigenvalues();
-  const Eigen::MatrixXd V = eig.eigenvectors();
-  constexpr double kFlat = 1e-9;
-  Eigen::MatrixXd Ninv = Eigen::MatrixXd::Zero(d.size(), d.size());
-  std::vector<bool> flat_param(n, false);
-  for (Eigen::Index k = 0; k < lambda.size(); ++k) {
-    if (lambda(k) > kFlat * static_cast<double>(n)) {
-      Ninv += V.col(k) * V.col(k).transpose() / lambda(k);
-    } else {
-      for (Eigen::Index j = 0; j < d.size(); ++j)
-        if (std::abs(V(j, k)) > 0.1) flat_param[static_cast<std::size_t>(j)] = true;
-    }
-  }
-  for (std::size_t j = 0; j < n; ++j)
-    if (d(static_cast<Eigen::Index>(j)) == 0) flat_param[j] = true;
-  const double scale = std::max(1.0, r.chi2_per_dof);
-  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(d.size(), d.size());
-  for (Eigen::Index a = 0; a < d.size(); ++a)
-    for (Eigen::Index b = 0; b < d.size(); ++b)
-      if (d(a) > 0 && d(b) > 0) cov(a, b) = scale * Ninv(a, b) / (d(a) * d(b));
-
-  r.correlation.assign(n, std::vector<double>(n, 0.0));
-  for (std::size_t a = 0; a < n; ++a) {
-    for (std::size_t b = 0; b < n; ++b) {
-      const auto A = static_cast<Eigen::Index>(a), B = static_cast<Eigen::Index>(b);
-      const double den = std::sqrt(cov(A, A) * cov(B, B));
-      r.correlation[a][b] = a == b ? 1.0 : (den > 0 ? cov(A, B) / den : 0.0);
-    }
-  }
-
-  for (std::size_t j = 0; j < n; ++j) {
-    const auto& p = problem.params[j];
-    FittedParameter fp;
-    fp.name = p.name;
-    fp.value = x[j];
-    fp.start = p.start, fp.lo = p.lo, fp.hi = p.hi;
-    // Within half a percent of the range (in the fitting coordinate, log for log-scale
-    // parameters) of a bound: the optimiser may stop just short of the bound it is
-    // pressing against, and such a value is no estimate either.
-    const double t = 0.5 * (1 + std::sin(y(static_cast<Eigen::Index>(j))));
-    fp.at_bound = t < kBoundMargin || t > 1 - kBoundMargin;
-    fp.identifiable = !flat_param[j];
-    const double var = cov(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j));
-    fp.u = flat_param[j] ? std::numeric_limits<double>::quiet_NaN() : std::sqrt(var);
-    if (flat_param[j])
-      r.warnings.push_back(fmt::format("{} is not identifiable: the data do not constrain it "
-                                       "(a flat direction of chi2)", p.name));
-    r.parameters.push_back(fp);
-  }
+  const Information in = information(J, r.chi2_per_dof);
+  r.correlation = correlation_of(in.cov);
+  add_parameters(problem, x, y, in, r);
   bound_warnings(r.parameters, problem.channel, r.warnings);
-  for (std::size_t a = 0; a < n; ++a)
-    for (std::size_t b = a + 1; b < n; ++b)
-      if (std::abs(r.correlation[a][b]) > options.correlation_limit &&
-          !flat_param[a] && !flat_param[b]) {
-        r.parameters[a].identifiable = r.parameters[b].identifiable = false;
-        r.warnings.push_back(fmt::format("{} and {} are correlated (rho = {:.3f}): the data "
-                                         "hardly separate them", problem.params[a].name,
-                                         problem.params[b].name, r.correlation[a][b]));
-      }
-  // Directions along which χ² hardly changes, in parameters scaled by their information.
-  for (Eigen::Index k = 0; k < lambda.size(); ++k) {
-    if (lambda(k) >= 1 - options.correlation_limit || n < 2) continue;
-    Degeneracy dg;
-    dg.eigenvalue = std::max(0.0, lambda(k));
-    for (Eigen::Index j = 0; j < d.size(); ++j)
-      if (std::abs(V(j, k)) > 0.05)
-        dg.combination.emplace_back(problem.params[static_cast<std::size_t>(j)].name, V(j, k));
-    if (dg.combination.size() >= 2) {
-      std::string text;
-      for (const auto& [name, c] : dg.combination)
-        text += fmt::format("{}{:+.2f}·{}", text.empty() ? "" : " ", c, name);
-      r.warnings.push_back(fmt::format("the data cannot separate the combination {} "
-                                       "(eigenvalue {:.2g} of the normalised information)",
-                                       text, dg.eigenvalue));
-    }
-    r.degenerate.push_back(std::move(dg));
-  }
+  correlation_warnings(problem, in, options.correlation_limit, r);
+  add_degeneracies(problem, in, options.correlation_limit, r);
   return r;
 }
-
 
 std::vector<double> global_start(const Problem& problem, const FitOptions& options) {
   const std::size_t n = problem.params.size();

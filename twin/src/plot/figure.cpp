@@ -378,47 +378,99 @@ Fonts fonts_for(const Figure& f) {
   return {base, base * 1.3, base * 1.05, base * 0.9, base * 0.9};
 }
 
-void draw_figure(cairo_t* cr, const Figure& f) {
-  const Fonts fs = fonts_for(f);
-  cairo_set_source_rgb(cr, 1, 1, 1);
-  cairo_paint(cr);
+// The title across the top; returns where the panels start.
+double draw_title(cairo_t* cr, const Figure& f, const Fonts& fs) {
+  if (f.title.empty()) return 0.8 * fs.base;
+  const auto title = fit_text(cr, f.title, 0.96 * f.width, fs.title, 0.55 * fs.title, true);
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  text(cr, title, 0.5 * f.width, 1.3 * fs.title, 0.5);
+  return 2.4 * fs.title;
+}
 
-  double top = 0.8 * fs.base;
-  if (!f.title.empty()) {
-    const auto title = fit_text(cr, f.title, 0.96 * f.width, fs.title, 0.55 * fs.title, true);
-    cairo_set_source_rgb(cr, 0, 0, 0);
-    text(cr, title, 0.5 * f.width, 1.3 * fs.title, 0.5);
-    top = 2.4 * fs.title;
+// The notes' column: as wide as its longest line at the legend's size, at most a third.
+// Returns the width left to the panels.
+double draw_notes(cairo_t* cr, const Figure& f, const Fonts& fs, double top) {
+  if (f.notes.empty()) return f.width;
+  font(cr, fs.legend);
+  double w = 0;
+  for (const auto& n : f.notes) w = std::max(w, text_width(cr, n));
+  const double column = std::min(w, f.width / 3 - 1.2 * fs.base);
+  double size = fs.legend;
+  if (w > column) size = std::max(0.6 * fs.legend, fs.legend * column / w);
+  const double line = 1.35 * size;
+  const double width = f.width - column - 1.2 * fs.base;
+  cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
+  double y = top + fs.base;
+  for (const auto& n : f.notes) {
+    if (y > f.height - 0.5 * line) break;
+    const auto shown = fit_text(cr, n, column, size, size);
+    text(cr, shown, width + 0.4 * fs.base, y, 0);
+    y += line;
   }
+  return width;
+}
 
-  // The notes' column: as wide as its longest line at the legend's size, at most a third.
-  double width = f.width;
-  if (!f.notes.empty()) {
-    font(cr, fs.legend);
-    double w = 0;
-    for (const auto& n : f.notes) w = std::max(w, text_width(cr, n));
-    const double column = std::min(w, f.width / 3 - 1.2 * fs.base);
-    double size = fs.legend;
-    if (w > column) size = std::max(0.6 * fs.legend, fs.legend * column / w);
-    const double line = 1.35 * size;
-    width = f.width - column - 1.2 * fs.base;
-    cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
-    double y = top + fs.base;
-    for (const auto& n : f.notes) {
-      if (y > f.height - 0.5 * line) break;
-      const auto shown = fit_text(cr, n, column, size, size);
-      text(cr, shown, width + 0.4 * fs.base, y, 0);
-      y += line;
-    }
+// Where a panel goes: its share of the figure, the plot inside it, its scales, ticks and
+// legend.
+struct Layout {
+  Scale sx, sy;
+  std::vector<Tick> tx, ty;
+  Rect area, plot;
+  LegendBox legend;
+
+  void map_axes() {
+    sx.p0 = plot.x;
+    sx.p1 = plot.right();
+    sy.p0 = plot.bottom();
+    sy.p1 = plot.y;
   }
+};
 
-  // Scales and tick labels first: the left margin is shared so that x axes line up.
-  struct Layout {
-    Scale sx, sy;
-    std::vector<Tick> tx, ty;
-    Rect area, plot;
-    LegendBox legend;
+// The legend in the corner it covers the fewest points in, or beside the plot when every
+// corner covers some (automatic); the plot narrows for a legend outside it.
+void place_legend(cairo_t* cr, const Panel& p, Layout& l, const Fonts& fs) {
+  l.legend = legend_size(cr, p, fs.legend);
+  LegendPlacement where = p.legend;
+  if (l.legend.entries.empty()) where = LegendPlacement::none;
+  const double inset = 0.6 * fs.base;
+  const auto corner = [&](LegendPlacement c) {
+    Rect r = l.legend.rect;
+    const bool right = c == LegendPlacement::upper_right || c == LegendPlacement::lower_right;
+    const bool upper = c == LegendPlacement::upper_right || c == LegendPlacement::upper_left;
+    r.x = right ? l.plot.right() - inset - r.w : l.plot.x + inset;
+    r.y = upper ? l.plot.y + inset : l.plot.bottom() - inset - r.h;
+    return r;
   };
+  if (where == LegendPlacement::automatic) {
+    where = LegendPlacement::outside_right;
+    int best = std::numeric_limits<int>::max();
+    for (auto c : {LegendPlacement::upper_right, LegendPlacement::upper_left,
+                   LegendPlacement::lower_right, LegendPlacement::lower_left}) {
+      const Rect r = corner(c);
+      if (r.w > l.plot.w * 0.6 || r.h > l.plot.h * 0.8) continue;
+      const int n = covered(r, p, l.sx, l.sy);
+      if (n < best) {
+        best = n;
+        where = c;
+      }
+    }
+    if (best > 0) where = LegendPlacement::outside_right;
+  }
+  if (where == LegendPlacement::outside_right) {
+    l.plot.w -= l.legend.rect.w + inset;
+    l.map_axes();
+    l.legend.rect.x = l.plot.right() + inset;
+    l.legend.rect.y = l.plot.y;
+  } else if (where != LegendPlacement::none) {
+    l.legend.rect = corner(where);
+  } else {
+    l.legend.entries.clear();
+  }
+}
+
+// Scales and tick labels first: the left margin is shared so that x axes line up.
+std::vector<Layout> lay_out(cairo_t* cr, const Figure& f, const Fonts& fs, double top,
+                            double width) {
   std::vector<Layout> layouts(f.panels.size());
   double total_ratio = 0;
   for (const auto& p : f.panels) total_ratio += p.height_ratio;
@@ -445,138 +497,116 @@ void draw_figure(cairo_t* cr, const Figure& f) {
     const double foot = 1.6 * fs.tick + (p.x.label.empty() && p.x.unit.empty() ? 0.4 * fs.base
                                                                              : 2.0 * fs.label);
     l.plot = {left, l.area.y + head, width - left - 1.6 * fs.base, l.area.h - head - foot};
-    l.legend = legend_size(cr, p, fs.legend);
-    const auto map_axes = [&] {
-      l.sx.p0 = l.plot.x;
-      l.sx.p1 = l.plot.right();
-      l.sy.p0 = l.plot.bottom();
-      l.sy.p1 = l.plot.y;
-    };
-    map_axes();
-    LegendPlacement where = p.legend;
-    if (l.legend.entries.empty()) where = LegendPlacement::none;
-    const double inset = 0.6 * fs.base;
-    const auto corner = [&](LegendPlacement c) {
-      Rect r = l.legend.rect;
-      const bool right = c == LegendPlacement::upper_right || c == LegendPlacement::lower_right;
-      const bool upper = c == LegendPlacement::upper_right || c == LegendPlacement::upper_left;
-      r.x = right ? l.plot.right() - inset - r.w : l.plot.x + inset;
-      r.y = upper ? l.plot.y + inset : l.plot.bottom() - inset - r.h;
-      return r;
-    };
-    if (where == LegendPlacement::automatic) {
-      where = LegendPlacement::outside_right;
-      int best = std::numeric_limits<int>::max();
-      for (auto c : {LegendPlacement::upper_right, LegendPlacement::upper_left,
-                     LegendPlacement::lower_right, LegendPlacement::lower_left}) {
-        const Rect r = corner(c);
-        if (r.w > l.plot.w * 0.6 || r.h > l.plot.h * 0.8) continue;
-        const int n = covered(r, p, l.sx, l.sy);
-        if (n < best) {
-          best = n;
-          where = c;
-        }
-      }
-      if (best > 0) where = LegendPlacement::outside_right;
-    }
-    if (where == LegendPlacement::outside_right) {
-      l.plot.w -= l.legend.rect.w + inset;
-      map_axes();
-      l.legend.rect.x = l.plot.right() + inset;
-      l.legend.rect.y = l.plot.y;
-    } else if (where != LegendPlacement::none) {
-      l.legend.rect = corner(where);
-    } else {
-      l.legend.entries.clear();
-    }
+    l.map_axes();
+    place_legend(cr, p, l, fs);
     l.tx = ticks(l.sx, l.plot.w);
   }
+  return layouts;
+}
 
-  for (std::size_t k = 0; k < f.panels.size(); ++k) {
-    const Panel& p = f.panels[k];
-    const Layout& l = layouts[k];
-    const Rect& r = l.plot;
-    cairo_set_dash(cr, nullptr, 0, 0);
-
-    // grid at major ticks, then reference lines
-    cairo_set_line_width(cr, 0.6);
-    cairo_set_source_rgb(cr, 0.88, 0.88, 0.88);
-    for (const auto& t : l.tx) {
-      if (!t.major) continue;
-      const double x = std::round(l.sx.map(t.v)) + 0.5;
-      cairo_move_to(cr, x, r.y);
-      cairo_line_to(cr, x, r.bottom());
-    }
-    for (const auto& t : l.ty) {
-      if (!t.major) continue;
-      const double yy = std::round(l.sy.map(t.v)) + 0.5;
-      cairo_move_to(cr, r.x, yy);
-      cairo_line_to(cr, r.right(), yy);
-    }
-    cairo_stroke(cr);
-    cairo_set_source_rgb(cr, 0.45, 0.45, 0.45);
-    cairo_set_line_width(cr, 1.0);
-    for (double v : p.y_reference_lines) {
-      if (!l.sy.valid(v) || v < std::min(l.sy.lo, l.sy.hi) || v > std::max(l.sy.lo, l.sy.hi))
-        continue;
-      cairo_move_to(cr, r.x, l.sy.map(v));
-      cairo_line_to(cr, r.right(), l.sy.map(v));
-    }
-    cairo_stroke(cr);
-
-    // series, clipped to the plot area
-    cairo_save(cr);
-    cairo_rectangle(cr, r.x, r.y, r.w, r.h);
-    cairo_clip(cr);
-    for (std::size_t i = 0; i < p.series.size(); ++i) draw_series(cr, p.series[i], i, l.sx, l.sy);
-    cairo_restore(cr);
-
-    // frame and ticks
-    cairo_set_dash(cr, nullptr, 0, 0);
-    cairo_set_source_rgb(cr, 0, 0, 0);
-    cairo_set_line_width(cr, 1.0);
-    cairo_rectangle(cr, r.x, r.y, r.w, r.h);
-    cairo_stroke(cr);
-    const double major = 0.5 * fs.base, minor = 0.28 * fs.base;
-    for (const auto& t : l.tx) {
-      const double x = l.sx.map(t.v);
-      cairo_move_to(cr, x, r.bottom());
-      cairo_line_to(cr, x, r.bottom() - (t.major ? major : minor));
-    }
-    for (const auto& t : l.ty) {
-      const double yy = l.sy.map(t.v);
-      cairo_move_to(cr, r.x, yy);
-      cairo_line_to(cr, r.x + (t.major ? major : minor), yy);
-    }
-    cairo_stroke(cr);
-    for (const auto& t : l.tx)
-      if (!t.label.base.empty())
-        draw_label(cr, t.label, l.sx.map(t.v), r.bottom() + 0.95 * fs.tick, 0.5, fs.tick);
-    double wmax = 0;
-    for (const auto& t : l.ty) {
-      if (t.label.base.empty()) continue;
-      wmax = std::max(wmax, label_width(cr, t.label, fs.tick));
-      draw_label(cr, t.label, r.x - 0.5 * fs.tick, l.sy.map(t.v), 1, fs.tick);
-    }
-
-    // axis titles
-    font(cr, fs.label);
-    const auto xt = axis_title(p.x);
-    if (!xt.empty()) text(cr, xt, r.x + 0.5 * r.w, r.bottom() + 1.6 * fs.tick + 1.0 * fs.label, 0.5);
-    const auto yt = axis_title(p.y);
-    if (!yt.empty()) {
-      cairo_save(cr);
-      cairo_translate(cr, r.x - 0.5 * fs.tick - wmax - 0.9 * fs.label, r.y + 0.5 * r.h);
-      cairo_rotate(cr, -std::numbers::pi / 2);
-      text(cr, yt, 0, 0, 0.5);
-      cairo_restore(cr);
-    }
-    if (!p.title.empty()) {
-      font(cr, fs.label, true);
-      text(cr, p.title, r.x + 0.5 * r.w, r.y - 0.9 * fs.label, 0.5);
-    }
-    if (!l.legend.entries.empty()) draw_legend(cr, l.legend, p, fs.legend);
+// The grid at major ticks, then the reference lines.
+void draw_grid(cairo_t* cr, const Panel& p, const Layout& l) {
+  const Rect& r = l.plot;
+  cairo_set_line_width(cr, 0.6);
+  cairo_set_source_rgb(cr, 0.88, 0.88, 0.88);
+  for (const auto& t : l.tx) {
+    if (!t.major) continue;
+    const double x = std::round(l.sx.map(t.v)) + 0.5;
+    cairo_move_to(cr, x, r.y);
+    cairo_line_to(cr, x, r.bottom());
   }
+  for (const auto& t : l.ty) {
+    if (!t.major) continue;
+    const double yy = std::round(l.sy.map(t.v)) + 0.5;
+    cairo_move_to(cr, r.x, yy);
+    cairo_line_to(cr, r.right(), yy);
+  }
+  cairo_stroke(cr);
+  cairo_set_source_rgb(cr, 0.45, 0.45, 0.45);
+  cairo_set_line_width(cr, 1.0);
+  for (double v : p.y_reference_lines) {
+    if (!l.sy.valid(v) || v < std::min(l.sy.lo, l.sy.hi) || v > std::max(l.sy.lo, l.sy.hi))
+      continue;
+    cairo_move_to(cr, r.x, l.sy.map(v));
+    cairo_line_to(cr, r.right(), l.sy.map(v));
+  }
+  cairo_stroke(cr);
+}
+
+// The frame, its ticks and their labels; returns the widest y tick label.
+double draw_frame(cairo_t* cr, const Layout& l, const Fonts& fs) {
+  const Rect& r = l.plot;
+  cairo_set_dash(cr, nullptr, 0, 0);
+  cairo_set_source_rgb(cr, 0, 0, 0);
+  cairo_set_line_width(cr, 1.0);
+  cairo_rectangle(cr, r.x, r.y, r.w, r.h);
+  cairo_stroke(cr);
+  const double major = 0.5 * fs.base, minor = 0.28 * fs.base;
+  for (const auto& t : l.tx) {
+    const double x = l.sx.map(t.v);
+    cairo_move_to(cr, x, r.bottom());
+    cairo_line_to(cr, x, r.bottom() - (t.major ? major : minor));
+  }
+  for (const auto& t : l.ty) {
+    const double yy = l.sy.map(t.v);
+    cairo_move_to(cr, r.x, yy);
+    cairo_line_to(cr, r.x + (t.major ? major : minor), yy);
+  }
+  cairo_stroke(cr);
+  for (const auto& t : l.tx)
+    if (!t.label.base.empty())
+      draw_label(cr, t.label, l.sx.map(t.v), r.bottom() + 0.95 * fs.tick, 0.5, fs.tick);
+  double wmax = 0;
+  for (const auto& t : l.ty) {
+    if (t.label.base.empty()) continue;
+    wmax = std::max(wmax, label_width(cr, t.label, fs.tick));
+    draw_label(cr, t.label, r.x - 0.5 * fs.tick, l.sy.map(t.v), 1, fs.tick);
+  }
+  return wmax;
+}
+
+// The axis titles (the y one beside the widest tick label) and the panel's title.
+void draw_titles(cairo_t* cr, const Panel& p, const Rect& r, const Fonts& fs, double wmax) {
+  font(cr, fs.label);
+  const auto xt = axis_title(p.x);
+  if (!xt.empty()) text(cr, xt, r.x + 0.5 * r.w, r.bottom() + 1.6 * fs.tick + 1.0 * fs.label, 0.5);
+  const auto yt = axis_title(p.y);
+  if (!yt.empty()) {
+    cairo_save(cr);
+    cairo_translate(cr, r.x - 0.5 * fs.tick - wmax - 0.9 * fs.label, r.y + 0.5 * r.h);
+    cairo_rotate(cr, -std::numbers::pi / 2);
+    text(cr, yt, 0, 0, 0.5);
+    cairo_restore(cr);
+  }
+  if (!p.title.empty()) {
+    font(cr, fs.label, true);
+    text(cr, p.title, r.x + 0.5 * r.w, r.y - 0.9 * fs.label, 0.5);
+  }
+}
+
+void draw_panel(cairo_t* cr, const Panel& p, const Layout& l, const Fonts& fs) {
+  const Rect& r = l.plot;
+  cairo_set_dash(cr, nullptr, 0, 0);
+  draw_grid(cr, p, l);
+  // series, clipped to the plot area
+  cairo_save(cr);
+  cairo_rectangle(cr, r.x, r.y, r.w, r.h);
+  cairo_clip(cr);
+  for (std::size_t i = 0; i < p.series.size(); ++i) draw_series(cr, p.series[i], i, l.sx, l.sy);
+  cairo_restore(cr);
+  const double wmax = draw_frame(cr, l, fs);
+  draw_titles(cr, p, r, fs, wmax);
+  if (!l.legend.entries.empty()) draw_legend(cr, l.legend, p, fs.legend);
+}
+
+void draw_figure(cairo_t* cr, const Figure& f) {
+  const Fonts fs = fonts_for(f);
+  cairo_set_source_rgb(cr, 1, 1, 1);
+  cairo_paint(cr);
+  const double top = draw_title(cr, f, fs);
+  const double width = draw_notes(cr, f, fs, top);
+  const auto layouts = lay_out(cr, f, fs, top, width);
+  for (std::size_t k = 0; k < f.panels.size(); ++k) draw_panel(cr, f.panels[k], layouts[k], fs);
 }
 
 std::string lower_ext(const std::string& path) {

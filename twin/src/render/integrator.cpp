@@ -21,6 +21,7 @@
 #include <cmath>
 #include <ctime>
 #include <exception>
+#include <functional>
 #include <mutex>
 #include <thread>
 
@@ -103,6 +104,254 @@ constexpr int kSilhouetteBatches = 4;  // sample budget of partly covered pixels
 // integrate smooth parts better but leave fewer nets to estimate the error from.
 constexpr int kNetPoints = 8;
 
+void add(Colour& acc, const Colour& f, double w) {
+  for (std::size_t k = 0; k < 3; ++k) acc[k] += w * f[k];
+}
+
+// h(ω) = L̄ + g·(ω − r), the dome to first order about the mirror direction r.
+struct ControlVariate {
+  double l_bar = 0;
+  Vec3 r{}, g{};
+};
+
+// The stochastic part of a pixel: the sum of its samples' values, their number and the
+// standard error of its luminance.
+struct Estimate {
+  Colour sum{0, 0, 0};
+  int samples = 0;
+  double se = 0;
+};
+
+// What every pixel of one render shares, and the steps of one pixel.
+struct SphereRender {
+  const RenderOptions& o;
+  const render::Scene& scene;
+  const render::ColourBsdf& cb;
+  double centre, radius;
+  Vec3 view{0, 0, 1};
+  bool stochastic, use_cv;
+  double floor;
+  // Samples come in nets of net_points (at most kNetPoints, and at least four nets per
+  // batch so that the first check has a standard error to go on).
+  int net_bits = 0;
+  std::uint32_t net_points = 1;
+  const std::vector<std::uint32_t>* sobol = nullptr;
+  int nets_per_batch = 0;
+
+  SphereRender(const RenderOptions& options, const render::Scene& sc, const render::ColourBsdf& b,
+               const SphereImage& out)
+      : o(options),
+        scene(sc),
+        cb(b),
+        centre(0.5 * out.size),
+        radius(out.radius),
+        stochastic(sc.has_environment() || sc.has_emitters()),
+        use_cv(b.isotropic() && b.has_moments()),
+        floor(kLitFloor / options.exposure) {
+    while ((2 << net_bits) <= kNetPoints && (4 << (net_bits + 1)) <= o.min_samples) ++net_bits;
+    net_points = 1u << net_bits;
+    sobol = &detail::SobolTable::get(net_points);
+    nets_per_batch = (o.min_samples + static_cast<int>(net_points) - 1) >> net_bits;
+  }
+
+  // Sub-pixel points on the sphere's disk, of kCoverageGrid².
+  int covered(int px, int py) const {
+    int inside = 0;
+    for (int sy = 0; sy < kCoverageGrid; ++sy)
+      for (int sx = 0; sx < kCoverageGrid; ++sx) {
+        const double x = (px + (sx + 0.5) / kCoverageGrid - centre) / radius;
+        const double y = (centre - (py + (sy + 0.5) / kCoverageGrid)) / radius;
+        inside += x * x + y * y <= 1;
+      }
+    return inside;
+  }
+
+  // The surface normal at the pixel centre, pulled onto the sphere on the silhouette.
+  Vec3 shading_normal(int px, int py) const {
+    double x = (px + 0.5 - centre) / radius, y = (centre - (py + 0.5)) / radius;
+    const double r2 = x * x + y * y;
+    if (r2 > 0.9999) {
+      const double s = std::sqrt(0.9999 / r2);
+      x *= s;
+      y *= s;
+    }
+    return {x, y, std::sqrt(std::max(0.0, 1 - x * x - y * y))};
+  }
+
+  // The point key light and the delta lobes, exactly.
+  Colour exact_terms(const Frame& frame, const Vec3& wo,
+                     std::vector<std::pair<Vec3, Colour>>& lobes) const {
+    Colour fixed{0, 0, 0};
+    if (scene.point_light()) {
+      const Vec3 wl = frame.to_local(scene.key());
+      if (wl.z > 0) add(fixed, cb.eval(wl, wo), kPi * wl.z);
+    }
+    if (cb.has_delta()) {
+      cb.delta(wo, lobes);
+      for (const auto& [wi, weight] : lobes) {
+        const Vec3 w = frame.to_world(wi);
+        add(fixed, weight, scene.environment(w) + scene.emitted(w));
+      }
+    }
+    return fixed;
+  }
+
+  // h about the mirror direction, and its exact expectation A·L̄ + g·(M − A·r) added to fixed.
+  ControlVariate control_variate(const Vec3& n, const Frame& frame, const Vec3& wo,
+                                 Colour& fixed) const {
+    ControlVariate cv;
+    cv.r = reflect(view, n);
+    cv.l_bar = scene.environment(cv.r);
+    constexpr double h = 1e-3;
+    const Vec3& r = cv.r;
+    cv.g = Vec3{scene.environment(r + Vec3{h, 0, 0}) - scene.environment(r - Vec3{h, 0, 0}),
+                scene.environment(r + Vec3{0, h, 0}) - scene.environment(r - Vec3{0, h, 0}),
+                scene.environment(r + Vec3{0, 0, h}) - scene.environment(r - Vec3{0, 0, h})} /
+           (2 * h);
+    const auto m = cb.moments(wo);
+    for (std::size_t k = 0; k < 3; ++k)
+      fixed[k] += m.albedo[k] * (cv.l_bar - dot(cv.g, r)) + dot(cv.g, frame.to_world(m.moment[k]));
+    return cv;
+  }
+
+  // The sum of one net's samples: a BSDF sample and an emitter sample per point, combined by
+  // the power heuristic.
+  Colour net_sum(const RqmcNet& net, const Frame& frame, const Vec3& wo,
+                 const ControlVariate& cv) const {
+    Colour sum{0, 0, 0};
+    for (std::uint32_t i = 0; i < net_points; ++i) {
+      double u[6];
+      net.point(i, u);
+      if (const auto s = cb.sample(wo, u[0], {u[1], u[2]}); s && s->wi.z > 0 && s->pdf > 0) {
+        const Vec3 w = frame.to_world(s->wi);
+        double l = use_cv ? scene.environment(w) - cv.l_bar - dot(cv.g, w - cv.r)
+                          : scene.environment(w);
+        if (const double e = scene.emitted(w); e > 0) {
+          const double pe = scene.emitter_pdf(w);
+          l += e * s->pdf * s->pdf / (s->pdf * s->pdf + pe * pe);
+        }
+        if (l != 0) add(sum, cb.eval(s->wi, wo), s->wi.z * l / s->pdf);
+      }
+      if (scene.has_emitters()) {
+        const auto es = scene.sample_emitter(u[3], {u[4], u[5]});
+        const Vec3 wl = frame.to_local(es.w);
+        if (wl.z > 0 && es.pdf > 0) {
+          const double pb = cb.pdf(wo, wl);
+          const double w = es.pdf * es.pdf / (es.pdf * es.pdf + pb * pb);
+          add(sum, cb.eval(wl, wo), wl.z * es.radiance * w / es.pdf);
+        }
+      }
+    }
+    return sum;
+  }
+
+  // Batches of nets until the luminance's standard error reaches rel_se or the budget is spent.
+  Estimate estimate(int px, int py, const Frame& frame, const Vec3& wo, const ControlVariate& cv,
+                    const Colour& fixed, int budget) const {
+    Estimate e;
+    double sum_y = 0, sum_y2 = 0;
+    int n_nets = 0;
+    SplitMix rng(detail::mix64(o.seed) ^ (static_cast<std::uint64_t>(py) << 32 |
+                                          static_cast<std::uint64_t>(px)));
+    for (;;) {
+      for (int b = 0; b < nets_per_batch; ++b) {
+        // One net: net_points scrambled Sobol points, its mean one independent sample of the
+        // pixel for the standard error.
+        const RqmcNet net(*sobol, rng, net_bits);
+        const Colour s = net_sum(net, frame, wo, cv);
+        add(e.sum, s, 1);
+        const double v = s[1] / net_points;
+        sum_y += v;
+        sum_y2 += v * v;
+      }
+      n_nets += nets_per_batch;
+      e.samples = n_nets * static_cast<int>(net_points);
+      const double nn = n_nets;
+      const double mean = sum_y / nn;
+      const double var = std::max(0.0, (sum_y2 / nn - mean * mean) * nn / (nn - 1));
+      e.se = std::sqrt(var / nn);
+      const double lum = fixed[1] + mean;
+      if (e.se <= o.rel_se * std::max(lum, floor) || e.samples >= budget) return e;
+    }
+  }
+
+  void pixel(int px, int py, SphereImage& out, std::vector<std::pair<Vec3, Colour>>& lobes) const {
+    const int inside = covered(px, py);
+    if (inside == 0) return;
+    const std::size_t idx = out.index(px, py);
+    // Pixels the silhouette crosses are blended with the background and see the lobe at
+    // grazing angles, where it converges slowest: they stop after kSilhouetteBatches.
+    const int budget = inside == kCoverageGrid * kCoverageGrid
+                           ? o.max_samples
+                           : std::min(o.max_samples, kSilhouetteBatches * o.min_samples);
+    out.coverage[idx] = static_cast<float>(inside) / (kCoverageGrid * kCoverageGrid);
+    const Vec3 n = shading_normal(px, py);
+    const Frame frame = Frame::from_normal(n);
+    const Vec3 wo = frame.to_local(view);
+    Colour fixed = exact_terms(frame, wo, lobes);
+    const ControlVariate cv = use_cv ? control_variate(n, frame, wo, fixed) : ControlVariate{};
+    const Estimate e = stochastic ? estimate(px, py, frame, wo, cv, fixed, budget) : Estimate{};
+    Colour total = fixed;
+    if (e.samples > 0) add(total, e.sum, 1.0 / e.samples);
+    if (!o.colour) {
+      total[0] = 0.3127 / 0.3290 * total[1];
+      total[2] = (1 - 0.3127 - 0.3290) / 0.3290 * total[1];
+    }
+    out.xyz[idx] = {total[0], total[1], total[2]};
+    out.samples[idx] = static_cast<std::uint32_t>(e.samples);
+    out.rel_se[idx] = static_cast<float>(e.se / std::max(total[1], floor));
+  }
+};
+
+// Rows handed out one at a time to `threads` workers (0: one per core); the first failure
+// stops them all and is rethrown.
+void for_each_row(int rows, unsigned threads, const std::function<void(int)>& row) {
+  std::atomic<int> next_row{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  const auto worker = [&] {
+    try {
+      for (int py = next_row++; py < rows; py = next_row++) row(py);
+    } catch (...) {
+      const std::lock_guard lock(failure_mutex);
+      if (!failure) failure = std::current_exception();
+      next_row = rows;  // stop the others
+    }
+  };
+  unsigned nt = threads != 0 ? threads : std::max(1u, std::thread::hardware_concurrency());
+  nt = std::min<unsigned>(nt, static_cast<unsigned>(rows));
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < nt; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
+}
+
+// Noise over the lit pixels fully on the sphere.
+NoiseReport noise_of(const SphereImage& out, const RenderOptions& o) {
+  std::vector<double> rel;
+  double samples = 0;
+  std::size_t on = 0;
+  for (std::size_t i = 0; i < out.coverage.size(); ++i) {
+    if (out.coverage[i] <= 0) continue;
+    ++on;
+    samples += out.samples[i];
+    if (out.coverage[i] >= 1 && out.xyz[i].y * o.exposure >= kLitFloor) rel.push_back(out.rel_se[i]);
+  }
+  NoiseReport nr;
+  nr.lit_pixels = rel.size();
+  nr.mean_samples = on > 0 ? samples / static_cast<double>(on) : 0;
+  if (!rel.empty()) {
+    nr.median_rel_se = quantile(rel, 0.5);
+    nr.p95_rel_se = quantile(rel, 0.95);
+    nr.max_rel_se = *std::max_element(rel.begin(), rel.end());
+    const auto ok = std::count_if(rel.begin(), rel.end(),
+                                  [&](double r) { return r <= o.rel_se * (1 + 1e-9); });
+    nr.converged_fraction = static_cast<double>(ok) / static_cast<double>(rel.size());
+  }
+  return nr;
+}
+
 }  // namespace
 
 void Lighting::validate() const {
@@ -139,179 +388,12 @@ SphereImage render_sphere(const Bsdf& bsdf, const RenderOptions& o) {
   out.coverage.assign(npx, 0.0f);
   out.rel_se.assign(npx, 0.0f);
   out.samples.assign(npx, 0);
-  const double c = 0.5 * size, radius = out.radius;
-  const Vec3 view{0, 0, 1};
-  const bool stochastic = scene.has_environment() || scene.has_emitters();
-  const bool use_cv = cb.isotropic() && cb.has_moments();
-  const double floor = kLitFloor / o.exposure;
-  // Samples come in nets of net_points (at most kNetPoints, and at least four nets per
-  // batch so that the first check has a standard error to go on).
-  int net_bits = 0;
-  while ((2 << net_bits) <= kNetPoints && (4 << (net_bits + 1)) <= o.min_samples) ++net_bits;
-  const std::uint32_t net_points = 1u << net_bits;
-  const auto& sobol = detail::SobolTable::get(net_points);
-  const int nets_per_batch = (o.min_samples + static_cast<int>(net_points) - 1) >> net_bits;
-
-  std::atomic<int> next_row{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  const auto worker = [&] {
-    try {
-      std::vector<std::pair<Vec3, Colour>> lobes;
-      for (int py = next_row++; py < size; py = next_row++) {
-        for (int px = 0; px < size; ++px) {
-          const std::size_t idx = out.index(px, py);
-          int inside = 0;
-          for (int sy = 0; sy < kCoverageGrid; ++sy)
-            for (int sx = 0; sx < kCoverageGrid; ++sx) {
-              const double x = (px + (sx + 0.5) / kCoverageGrid - c) / radius;
-              const double y = (c - (py + (sy + 0.5) / kCoverageGrid)) / radius;
-              inside += x * x + y * y <= 1;
-            }
-          if (inside == 0) continue;
-          // Pixels the silhouette crosses are blended with the background and see the lobe
-          // at grazing angles, where it converges slowest: they stop after kSilhouetteBatches.
-          const int budget = inside == kCoverageGrid * kCoverageGrid
-                                 ? o.max_samples
-                                 : std::min(o.max_samples, kSilhouetteBatches * o.min_samples);
-          out.coverage[idx] = static_cast<float>(inside) / (kCoverageGrid * kCoverageGrid);
-          // Shading point: the pixel centre, pulled onto the sphere on the silhouette.
-          double x = (px + 0.5 - c) / radius, y = (c - (py + 0.5)) / radius;
-          const double r2 = x * x + y * y;
-          if (r2 > 0.9999) {
-            const double s = std::sqrt(0.9999 / r2);
-            x *= s;
-            y *= s;
-          }
-          const Vec3 n{x, y, std::sqrt(std::max(0.0, 1 - x * x - y * y))};
-          const Frame frame = Frame::from_normal(n);
-          const Vec3 wo = frame.to_local(view);
-          Colour fixed{0, 0, 0};
-          const auto add = [](Colour& acc, const Colour& f, double w) {
-            for (std::size_t k = 0; k < 3; ++k) acc[k] += w * f[k];
-          };
-          if (scene.point_light()) {
-            const Vec3 wl = frame.to_local(scene.key());
-            if (wl.z > 0) add(fixed, cb.eval(wl, wo), kPi * wl.z);
-          }
-          if (cb.has_delta()) {
-            cb.delta(wo, lobes);
-            for (const auto& [wi, weight] : lobes) {
-              const Vec3 w = frame.to_world(wi);
-              add(fixed, weight, scene.environment(w) + scene.emitted(w));
-            }
-          }
-          double l_bar = 0;
-          Vec3 r{}, g{};
-          if (use_cv) {
-            r = reflect(view, n);
-            l_bar = scene.environment(r);
-            constexpr double h = 1e-3;
-            g = Vec3{scene.environment(r + Vec3{h, 0, 0}) - scene.environment(r - Vec3{h, 0, 0}),
-                     scene.environment(r + Vec3{0, h, 0}) - scene.environment(r - Vec3{0, h, 0}),
-                     scene.environment(r + Vec3{0, 0, h}) - scene.environment(r - Vec3{0, 0, h})} /
-                (2 * h);
-            const auto m = cb.moments(wo);
-            for (std::size_t k = 0; k < 3; ++k)
-              fixed[k] += m.albedo[k] * (l_bar - dot(g, r)) + dot(g, frame.to_world(m.moment[k]));
-          }
-          Colour sum{0, 0, 0};
-          double sum_y = 0, sum_y2 = 0;
-          int n_samples = 0, n_nets = 0;
-          double se = 0;
-          if (stochastic) {
-            SplitMix rng(detail::mix64(o.seed) ^ (static_cast<std::uint64_t>(py) << 32 |
-                                                  static_cast<std::uint64_t>(px)));
-            for (;;) {
-              for (int b = 0; b < nets_per_batch; ++b) {
-                // One net: net_points scrambled Sobol points, its mean one independent
-                // sample of the pixel for the standard error.
-                const RqmcNet net(sobol, rng, net_bits);
-                Colour net_sum{0, 0, 0};
-                for (std::uint32_t i = 0; i < net_points; ++i) {
-                  double u[6];
-                  net.point(i, u);
-                  if (const auto s = cb.sample(wo, u[0], {u[1], u[2]}); s && s->wi.z > 0 && s->pdf > 0) {
-                    const Vec3 w = frame.to_world(s->wi);
-                    double l = use_cv ? scene.environment(w) - l_bar - dot(g, w - r)
-                                      : scene.environment(w);
-                    if (const double e = scene.emitted(w); e > 0) {
-                      const double pe = scene.emitter_pdf(w);
-                      l += e * s->pdf * s->pdf / (s->pdf * s->pdf + pe * pe);
-                    }
-                    if (l != 0) add(net_sum, cb.eval(s->wi, wo), s->wi.z * l / s->pdf);
-                  }
-                  if (scene.has_emitters()) {
-                    const auto es = scene.sample_emitter(u[3], {u[4], u[5]});
-                    const Vec3 wl = frame.to_local(es.w);
-                    if (wl.z > 0 && es.pdf > 0) {
-                      const double pb = cb.pdf(wo, wl);
-                      const double w = es.pdf * es.pdf / (es.pdf * es.pdf + pb * pb);
-                      add(net_sum, cb.eval(wl, wo), wl.z * es.radiance * w / es.pdf);
-                    }
-                  }
-                }
-                add(sum, net_sum, 1);
-                const double v = net_sum[1] / net_points;
-                sum_y += v;
-                sum_y2 += v * v;
-              }
-              n_nets += nets_per_batch;
-              n_samples = n_nets * static_cast<int>(net_points);
-              const double nn = n_nets;
-              const double mean = sum_y / nn;
-              const double var = std::max(0.0, (sum_y2 / nn - mean * mean) * nn / (nn - 1));
-              se = std::sqrt(var / nn);
-              const double lum = fixed[1] + mean;
-              if (se <= o.rel_se * std::max(lum, floor) || n_samples >= budget) break;
-            }
-          }
-          Colour total = fixed;
-          if (n_samples > 0) add(total, sum, 1.0 / n_samples);
-          if (!o.colour) {
-            total[0] = 0.3127 / 0.3290 * total[1];
-            total[2] = (1 - 0.3127 - 0.3290) / 0.3290 * total[1];
-          }
-          out.xyz[idx] = {total[0], total[1], total[2]};
-          out.samples[idx] = static_cast<std::uint32_t>(n_samples);
-          out.rel_se[idx] = static_cast<float>(se / std::max(total[1], floor));
-        }
-      }
-    } catch (...) {
-      const std::lock_guard lock(failure_mutex);
-      if (!failure) failure = std::current_exception();
-      next_row = size;  // stop the others
-    }
-  };
-  unsigned nt = o.threads != 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
-  nt = std::min<unsigned>(nt, static_cast<unsigned>(size));
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < nt; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
-
-  // Noise over the lit pixels fully on the sphere.
-  std::vector<double> rel;
-  double samples = 0;
-  std::size_t on = 0;
-  for (std::size_t i = 0; i < npx; ++i) {
-    if (out.coverage[i] <= 0) continue;
-    ++on;
-    samples += out.samples[i];
-    if (out.coverage[i] >= 1 && out.xyz[i].y * o.exposure >= kLitFloor) rel.push_back(out.rel_se[i]);
-  }
-  auto& nr = out.noise;
-  nr.lit_pixels = rel.size();
-  nr.mean_samples = on > 0 ? samples / static_cast<double>(on) : 0;
-  if (!rel.empty()) {
-    nr.median_rel_se = quantile(rel, 0.5);
-    nr.p95_rel_se = quantile(rel, 0.95);
-    nr.max_rel_se = *std::max_element(rel.begin(), rel.end());
-    const auto ok = std::count_if(rel.begin(), rel.end(),
-                                  [&](double r) { return r <= o.rel_se * (1 + 1e-9); });
-    nr.converged_fraction = static_cast<double>(ok) / static_cast<double>(rel.size());
-  }
+  const SphereRender r(o, scene, cb, out);
+  for_each_row(size, o.threads, [&](int py) {
+    std::vector<std::pair<Vec3, Colour>> lobes;
+    for (int px = 0; px < size; ++px) r.pixel(px, py, out, lobes);
+  });
+  out.noise = noise_of(out, o);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   out.cpu_seconds = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
   return out;

@@ -280,6 +280,8 @@ class Store {
   std::filesystem::path state_dir() const;  // absolute
   class ReadLease;
   ReadLease read() const;
+  // WAL, the synchronous level asked for, foreign keys: each time the writer is opened.
+  void configure_writer(Connection& c) const;
   void migrate();
   void outbox_in(OutboxRow::Kind kind, std::int64_t ref, std::int64_t idx,
                  const nlohmann::json& detail = nullptr);

@@ -1,5 +1,5 @@
 // Statistical helpers for the BSDF tests: a deterministic RNG, direction helpers, the
-// chi-square tail (shared test support, for p-values) and a chi-square
+// chi-square tail and Pearson's test (shared test support) and a chi-square
 // goodness-of-fit test of a sampler against its density on a 2-D parametrisation of the
 // sphere (bins with small expected counts are pooled, as in pbrt's and Mitsuba's tests).
 #pragma once
@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
-#include <limits>
 #include <optional>
 #include <random>
 #include <string>
@@ -208,35 +207,11 @@ inline Chi2Result chi2_test(const Bsdf& b, const Vec3& wo, const SphereMap& map,
   observed.push_back(n - in_domain);  // failed draws and draws outside the domain
   expected.push_back(std::max(0.0, n * (1 - r.pdf_integral)));
 
-  // Pool cells expected to hold fewer than 5 draws.
-  double pool_obs = 0, pool_exp = 0, worst = -1;
-  int cells = 0;
-  for (std::size_t k = 0; k < expected.size(); ++k) {
-    if (expected[k] < 5) {
-      pool_obs += observed[k];
-      pool_exp += expected[k];
-      continue;
-    }
-    const double d = observed[k] - expected[k];
-    const double c = d * d / expected[k];
-    if (c > worst) {
-      worst = c;
-      r.worst = "cell " + std::to_string(k) + ": observed " + std::to_string(observed[k]) +
-                ", expected " + std::to_string(expected[k]);
-    }
-    r.statistic += c;
-    ++cells;
-  }
-  if (pool_exp > 0) {
-    const double d = pool_obs - pool_exp;
-    r.statistic += d * d / pool_exp;
-    ++cells;
-  } else if (pool_obs > 0) {
-    r.statistic = std::numeric_limits<double>::infinity();
-    r.worst = "draws where the pdf integrates to zero";
-  }
-  r.dof = std::max(1, cells - 1);
-  r.p_value = chi2_sf(r.statistic, r.dof);
+  const auto test = ::gonio::test::pearson(observed, expected);
+  r.statistic = test.statistic;
+  r.dof = test.dof;
+  r.p_value = test.p_value;
+  r.worst = test.worst;
   return r;
 }
 

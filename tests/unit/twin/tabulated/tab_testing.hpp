@@ -15,6 +15,7 @@
 
 #include "gonio/proto/error.hpp"
 #include "gonio/test/chi_square.hpp"
+#include "gonio/test/error_of.hpp"
 #include "gonio/test/temp_dir.hpp"
 #include "gonio/test/test_bsdfs.hpp"
 #include "gonio/twin/bsdf.hpp"
@@ -108,12 +109,11 @@ inline std::vector<double> steps(double a, double b, double s) {
   return v;
 }
 
-// The test BSDFs and the chi-square tail come from the shared test support library.
+// The test BSDFs and Pearson's test come from the shared test support library.
 using ::gonio::test::tint;
 using Lambert = ::gonio::test::LambertBsdf;
 using Lobes = ::gonio::test::LobesBsdf;
 using Specular = ::gonio::test::SpecularBsdf;
-using ::gonio::test::gamma_q;
 
 // Chi-square test of `bsdf.sample_wi(wo, …)` against `bsdf.pdf(wo, ·)` over (cos θ, φ) bins
 // of the whole sphere; expected counts by midpoint integration of the pdf on a sub-grid.
@@ -168,39 +168,14 @@ inline ChiSquare chi_square(const Bsdf& bsdf, const Vec3& wo, std::size_t sample
     }
   }
   const double drawn = static_cast<double>(samples - res.failed_draws);
-  double chi2 = 0, pooled_o = 0, pooled_e = 0;
-  int bins = 0;
-  for (std::size_t b = 0; b < observed.size(); ++b) {
-    const double e = expected[b] * drawn / res.pdf_integral;
-    if (e < 5) {
-      pooled_o += observed[b];
-      pooled_e += e;
-      continue;
-    }
-    chi2 += (observed[b] - e) * (observed[b] - e) / e;
-    ++bins;
-  }
-  if (pooled_e >= 5) {
-    chi2 += (pooled_o - pooled_e) * (pooled_o - pooled_e) / pooled_e;
-    ++bins;
-  }
-  res.p_value = bins > 1 ? gamma_q((bins - 1) / 2.0, chi2 / 2) : 1.0;
+  for (auto& e : expected) e *= drawn / res.pdf_integral;
+  res.p_value = ::gonio::test::pearson(observed, expected).p_value;
   return res;
 }
 
 // A fresh directory under the system temporary directory, removed at destruction.
 using ScratchDir = ::gonio::test::TempDir;
 
-// Runs f and returns the gonio::Error it throws (a test failure when it throws nothing).
-template <typename F>
-Error error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e;
-  }
-  ADD_FAILURE() << "no gonio::Error was thrown";
-  return Error(Errc::internal, "none");
-}
+using ::gonio::test::error_of;
 
 }  // namespace gonio::twin::tabtest

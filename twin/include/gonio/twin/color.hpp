@@ -62,9 +62,6 @@ class Observer {
 
   ObserverKind kind() const noexcept { return kind_; }
   const std::vector<double>& wavelengths() const noexcept { return nm_; }
-  const std::vector<double>& x_bar() const noexcept { return x_; }
-  const std::vector<double>& y_bar() const noexcept { return y_; }
-  const std::vector<double>& z_bar() const noexcept { return z_; }
   // Linear interpolation; zero outside the table.
   Xyz at(double nm) const;
 

@@ -40,7 +40,6 @@ inline Vec3 normalize(const Vec3& v) noexcept { return v / length(v); }
 constexpr Vec3 reflect(const Vec3& w, const Vec3& n) noexcept { return 2 * dot(w, n) * n - w; }
 
 // Local shading frame helpers: the sample frame has its normal on +z.
-inline double cos_theta(const Vec3& w) noexcept { return w.z; }
 inline double abs_cos_theta(const Vec3& w) noexcept { return std::abs(w.z); }
 inline bool same_hemisphere(const Vec3& a, const Vec3& b) noexcept { return a.z * b.z > 0; }
 

@@ -92,8 +92,6 @@ class Session {
   bool out_of_step() const noexcept { return out_of_step_; }
   // Resynchronises now (see above); a no-op when in step.
   void resync(Deadline deadline);
-  // Late replies dropped by resynchronisations so far (for logs and tests).
-  std::uint64_t dropped_replies() const noexcept { return dropped_; }
 
  private:
   std::string read_line(Deadline deadline);
@@ -105,7 +103,6 @@ class Session {
   std::string buf_;  // received bytes not yet returned
   bool out_of_step_ = false;
   int markers_ = 0;  // *OPC? markers sent and not yet answered
-  std::uint64_t dropped_ = 0;
 };
 
 // ---- photometer driver -----------------------------------------------------------------

@@ -64,7 +64,6 @@ class ScpiSimDevice {
   // Handles one program message (without terminator; commands may be joined by ';').
   // Returns the response message without terminator, empty when there is none.
   std::string handle(std::string_view message);
-  std::size_t commands_handled() const;
   // How long the response of the last handle() is to be held back (then zero again).
   std::chrono::milliseconds take_reply_delay();
 
@@ -82,7 +81,6 @@ class ScpiSimDevice {
   std::deque<std::pair<int, std::string>> errors_;
   double pm_wavelength_ = 550;
   int pm_averages_ = 1;
-  std::size_t handled_ = 0;
   int measurements_ = 0;
   std::chrono::milliseconds reply_delay_{0};
 };
