@@ -10,15 +10,6 @@
 namespace gonio::twin {
 namespace {
 
-const char* distribution_name(Distribution d) {
-  switch (d) {
-    case Distribution::rectangular: return "rectangular";
-    case Distribution::triangular: return "triangular";
-    case Distribution::normal: return "normal";
-  }
-  return "normal";
-}
-
 // The finite-difference step of a tolerance: its half-width, or the half-width of the
 // rectangle with the same u for a normal one (√3·u), so the variants stay within what the
 // data sheet allows.
@@ -202,7 +193,7 @@ void to_json(nlohmann::json& j, const BudgetComponent& c) {
   const bool uniform =
       std::all_of(c.u.begin(), c.u.end(), [&](double v) { return c.u.empty() || v == c.u.front(); });
   j = nlohmann::json{{"component", c.name},
-                     {"distribution", distribution_name(c.distribution)},
+                     {"distribution", to_text(c.distribution)},
                      {"unit", c.unit},
                      {"random", c.random},
                      {"u", uniform ? nlohmann::json(c.u.empty() ? 0.0 : c.u.front()) : nlohmann::json(c.u)},

@@ -74,17 +74,8 @@ void check(double v, const std::string& field, double lo, double hi, std::string
   if (!(v >= lo && v <= hi)) throw Error::out_of_range(field, v, lo, hi, unit);
 }
 
-const char* distribution_name(Distribution d) {
-  switch (d) {
-    case Distribution::rectangular: return "rectangular";
-    case Distribution::triangular: return "triangular";
-    case Distribution::normal: return "normal";
-  }
-  return "normal";
-}
-
 nlohmann::json tolerance_json(const Tolerance& t) {
-  nlohmann::json j{{"distribution", distribution_name(t.distribution)}};
+  nlohmann::json j{{"distribution", to_text(t.distribution)}};
   if (t.distribution != Distribution::normal) {
     j["half_width"] = t.half_width;
   } else if (!t.spectral.empty()) {
@@ -163,6 +154,15 @@ constexpr ToleranceKey kToleranceKeys[] = {
 };
 
 }  // namespace
+
+const char* to_text(Distribution d) noexcept {
+  switch (d) {
+    case Distribution::rectangular: return "rectangular";
+    case Distribution::triangular: return "triangular";
+    case Distribution::normal: return "normal";
+  }
+  return "normal";
+}
 
 double Tolerance::standard_uncertainty(double wavelength_nm) const {
   switch (distribution) {

@@ -46,6 +46,8 @@ struct Extent {
 // How a stated tolerance is distributed (GUM, JCGM 100:2008 §4.3.7–4.3.9): a data sheet's
 // "±a" is rectangular unless it says otherwise; a calibration certificate's u is normal.
 enum class Distribution { rectangular, triangular, normal };
+// "rectangular", "triangular", "normal": the profile's and the budget's spelling.
+const char* to_text(Distribution d) noexcept;
 
 // One stated tolerance: ±half_width (rectangular, triangular) or a standard uncertainty u
 // (normal, k = 1). `spectral` (normal only) gives u per wavelength instead, as nm:u nodes
