@@ -128,7 +128,7 @@ BsdfPtr build_abg(const Params& p, const WavelengthGrid& grid) { return std::mak
 
 }  // namespace
 
-const Registrar kRegistered{{"abg",
+const Registrar kAbgRegistered{{"abg",
                              {{"A", false, 1e-9, 100, false, 0.01, " sr⁻¹"},
                               {"B", false, 1e-9, 10, false, 0.001, ""},
                               {"g", false, 0, 4, false, 2, ""}},

@@ -12,6 +12,6 @@ BsdfPtr build_beckmann(const Params& p, const WavelengthGrid& grid) {
 
 }  // namespace
 
-const Registrar kRegistered{{"beckmann", conductor_params(), &build_beckmann}};
+const Registrar kBeckmannRegistered{{"beckmann", conductor_params(), &build_beckmann}};
 
 }  // namespace gonio::twin::bsdf

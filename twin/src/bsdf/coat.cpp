@@ -45,7 +45,7 @@ BsdfPtr build_coat(const Params& p, const WavelengthGrid& grid) {
 
 }  // namespace
 
-const Registrar kRegistered{{"coat",
+const Registrar kCoatRegistered{{"coat",
                              {{"alpha", false, 0.001, 1, false, 0.05, ""},
                               {"ior", false, 1, 4, false, 1.5, ""}},
                              &build_coat}};

@@ -71,6 +71,6 @@ std::vector<ParamInfo> conductor_params() {
           {"k", true, 0, 20, false, 6.69, ""}};
 }
 
-const Registrar kRegistered{{"conductor", conductor_params(), &build_conductor}};
+const Registrar kConductorRegistered{{"conductor", conductor_params(), &build_conductor}};
 
 }  // namespace gonio::twin::bsdf

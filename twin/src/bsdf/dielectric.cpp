@@ -129,7 +129,7 @@ BsdfPtr build_dielectric(const Params& p, const WavelengthGrid& grid) {
 
 }  // namespace
 
-const Registrar kRegistered{{"dielectric",
+const Registrar kDielectricRegistered{{"dielectric",
                              {{"alpha", false, 0.001, 1, false, 0.1, ""},
                               {"ior", false, 1, 4, false, 1.5, ""}},
                              &build_dielectric}};

@@ -33,6 +33,6 @@ BsdfPtr build_lambert(const Params& p, const WavelengthGrid& grid) {
 
 }  // namespace
 
-const Registrar kRegistered{{"lambert", {{"albedo", true, 0, 1, false, 1.0, ""}}, &build_lambert}};
+const Registrar kLambertRegistered{{"lambert", {{"albedo", true, 0, 1, false, 1.0, ""}}, &build_lambert}};
 
 }  // namespace gonio::twin::bsdf

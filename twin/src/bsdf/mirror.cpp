@@ -37,6 +37,6 @@ BsdfPtr build_mirror(const Params& p, const WavelengthGrid& grid) {
 
 }  // namespace
 
-const Registrar kRegistered{{"mirror", {{"reflectance", true, 0, 1, false, 1.0, ""}}, &build_mirror}};
+const Registrar kMirrorRegistered{{"mirror", {{"reflectance", true, 0, 1, false, 1.0, ""}}, &build_mirror}};
 
 }  // namespace gonio::twin::bsdf

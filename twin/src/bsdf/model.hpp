@@ -70,8 +70,8 @@ double albedo_hint(const Bsdf& b, const Vec3& wo);
 double mean(std::span<const double> v) noexcept;
 
 // The models, by name. Each model's file registers it with a namespace-scope
-//   const Registrar kRegistered{{"name", {params...}, &build}};
-// run at start-up; twin/CMakeLists.txt links this family whole, so no model is left out.
+//   const Registrar kNameRegistered{{"name", {params...}, &build}};
+// (a name of its own: the unity build compiles several model files as one) run at start-up; twin/CMakeLists.txt links this family whole, so no model is left out.
 std::span<const ModelInfo* const> models();
 struct Registrar {
   explicit Registrar(ModelInfo info);

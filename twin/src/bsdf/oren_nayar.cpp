@@ -59,7 +59,7 @@ BsdfPtr build_oren_nayar(const Params& p, const WavelengthGrid& grid) {
 
 }  // namespace
 
-const Registrar kRegistered{{"oren-nayar",
+const Registrar kOrenNayarRegistered{{"oren-nayar",
                              {{"albedo", true, 0, 1, false, 0.8, ""},
                               {"sigma", false, 0, 90, false, 20.0, " deg"}},
                              &build_oren_nayar}};

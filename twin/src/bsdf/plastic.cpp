@@ -176,7 +176,7 @@ BsdfPtr build_plastic(const Params& p, const WavelengthGrid& grid) {
 
 }  // namespace
 
-const Registrar kRegistered{{"plastic",
+const Registrar kPlasticRegistered{{"plastic",
                              {{"albedo", true, 0, 1, false, 0.5, ""},
                               {"alpha", false, 0.001, 1, false, 0.05, ""},
                               {"ior", false, 1, 4, false, 1.5, ""},

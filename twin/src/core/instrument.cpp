@@ -75,7 +75,7 @@ void check(double v, const std::string& field, double lo, double hi, std::string
 }
 
 nlohmann::json tolerance_json(const Tolerance& t) {
-  nlohmann::json j{{"distribution", to_text(t.distribution)}};
+  nlohmann::json j{{"distribution", distribution_text(t.distribution)}};
   if (t.distribution != Distribution::normal) {
     j["half_width"] = t.half_width;
   } else if (!t.spectral.empty()) {
@@ -155,7 +155,7 @@ constexpr ToleranceKey kToleranceKeys[] = {
 
 }  // namespace
 
-const char* to_text(Distribution d) noexcept {
+const char* distribution_text(Distribution d) noexcept {
   switch (d) {
     case Distribution::rectangular: return "rectangular";
     case Distribution::triangular: return "triangular";

@@ -47,7 +47,7 @@ struct Extent {
 // "±a" is rectangular unless it says otherwise; a calibration certificate's u is normal.
 enum class Distribution { rectangular, triangular, normal };
 // "rectangular", "triangular", "normal": the profile's and the budget's spelling.
-const char* to_text(Distribution d) noexcept;
+const char* distribution_text(Distribution d) noexcept;
 
 // One stated tolerance: ±half_width (rectangular, triangular) or a standard uncertainty u
 // (normal, k = 1). `spectral` (normal only) gives u per wavelength instead, as nm:u nodes
