@@ -59,7 +59,7 @@ export function AdaptivePanel({ scan, status, track, points, candidates }) {
   const warnings = adaptiveWarnings(status);
   const params = parameterLines(status, target);
   const measured = new Set(points.map((p) => p.geometry_index)).size;
-  return html`<div class="adaptive" data-testid="adaptive" data-mode=${mode}>
+  return html`<div class="adaptive" data-testid="adaptive" data-mode=${mode} data-scan-state=${scan.state}>
     <h3>Adaptive scan · ${mode === 'curve' ? 'curve mode' : 'parameters mode'}</h3>
     <p class="muted">${mode === 'curve'
       ? `Points until the interpolated curve is within ${fmt(100 * target, 3)} % everywhere`

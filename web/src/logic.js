@@ -473,11 +473,14 @@ export function logRange(values, target = null) {
 
 // The loop's state for a badge, with the scan's: a loop that reports "running" in a scan that
 // is no longer running was stopped with it (paused, cancelled, failed).
+// The loop may reach its target while points it chose before are still being measured: it
+// says so until the scan ends.
 export function adaptiveState(status, scanState = 'running') {
   if (!status) return { state: 'none', text: 'no choice yet', tone: 'none' };
+  const pending = scanState === 'running' ? '; measuring the points already chosen' : '';
   switch (status.state) {
-    case 'target_reached': return { state: 'target_reached', text: `target reached in ${status.points_used} points`, tone: 'good' };
-    case 'max_points': return { state: 'max_points', text: `stopped at max_points (${status.points_used}) before the target`, tone: 'bad' };
+    case 'target_reached': return { state: 'target_reached', text: `target reached in ${status.points_used} points${pending}`, tone: 'good' };
+    case 'max_points': return { state: 'max_points', text: `stopped at max_points (${status.points_used}) before the target${pending}`, tone: 'bad' };
     default:
       if (scanState && scanState !== 'running' && scanState !== 'queued')
         return { state: 'running', text: `${scanState} after ${status.points_used} points`, tone: 'unsure' };
@@ -485,16 +488,17 @@ export function adaptiveState(status, scanState = 'running') {
   }
 }
 
-// The warnings to show: the loop's own, and first, when the model misfits, that said plainly.
+// The warnings to show: the loop's own, and first, when the model misfits, that said plainly
+// (the fit's own sentence about it when it has one, else one of ours).
+const MISFIT_TEXT = /does not describe the data/;
 export function adaptiveWarnings(status) {
   if (!status) return [];
-  const w = (status.warnings || []).map(String);
-  if (status.misfit) {
-    const chi = Number.isFinite(status.chi2_per_dof) ? ` (χ²/dof = ${fmt(status.chi2_per_dof, 3)})` : '';
-    return [{ text: `the model does not describe the data${chi}: its uncertainties are not to be trusted`, misfit: true },
-      ...w.map((text) => ({ text, misfit: false }))];
-  }
-  return w.map((text) => ({ text, misfit: false }));
+  const w = (status.warnings || []).map((text) => ({ text: String(text), misfit: false }));
+  if (!status.misfit) return w;
+  const own = w.findIndex((x) => MISFIT_TEXT.test(x.text));
+  if (own >= 0) return [{ ...w[own], misfit: true }, ...w.filter((_, i) => i !== own)];
+  const chi = Number.isFinite(status.chi2_per_dof) ? ` (χ²/dof = ${fmt(status.chi2_per_dof, 3)})` : '';
+  return [{ text: `the model does not describe the data${chi}: its uncertainties are not to be trusted`, misfit: true }, ...w];
 }
 
 // Each parameter's value ± u as text, with u relative to the value and whether it is at the

@@ -230,10 +230,20 @@ export function adaptivePlot(el, cols, { target, width, height, ylabel }) {
       x: { time: false, range: (u, lo, hi) => [Math.min(lo ?? 0, 0), Math.max(hi ?? 1, (lo ?? 0) + 1)] },
       y: { distr: 3, range: (u) => logRange(u.data.slice(1).flat(), target) },
     },
-    axes: [{ label: 'points used' }, { label: ylabel, size: 70 }],
+    axes: [
+      { label: 'points used', incrs: [1, 2, 5, 10, 20, 50, 100, 200, 500, 1000] },
+      { label: ylabel, size: 70, values: (u, splits) => splits.map(decade) },
+    ],
     series: [{ label: 'points' }, ...cols.labels.map((l, i) => ({ label: l, stroke: SERIES_COLOURS[i % SERIES_COLOURS.length], width: 1.5, spanGaps: true, points: { show: true, size: 5 } }))],
     hooks: { draw: [hline(target, 'y', colour)] },
   }, adaptiveData(cols), el);
+}
+
+// A log axis's tick label: the powers of ten only (1e-4, 0.001, 0.01 …).
+function decade(v) {
+  if (!(v > 0)) return '';
+  const e = Math.log10(v);
+  return Math.abs(e - Math.round(e)) < 1e-9 ? (e <= -4 ? `1e${Math.round(e)}` : String(Number(v.toPrecision(1)))) : '';
 }
 
 export function adaptiveData(cols) {

@@ -102,6 +102,7 @@ test('the state says why the loop stopped, or that its scan did', () => {
   const max = adaptiveState(status(12, [], { state: 'max_points' }), 'completed');
   assert.deepEqual([max.state, max.tone], ['max_points', 'bad']);
   assert.match(max.text, /max_points \(12\)/);
+  assert.equal(adaptiveState(status(27, [], { state: 'target_reached' }), 'running').text, 'target reached in 27 points; measuring the points already chosen');
   const cancelled = adaptiveState(status(9, []), 'cancelled');
   assert.deepEqual([cancelled.state, cancelled.tone, cancelled.text], ['running', 'unsure', 'cancelled after 9 points']);
 });
@@ -115,6 +116,9 @@ test('a misfit is said first and plainly, before the loop\'s own warnings', () =
   assert.match(w[0].text, /does not describe the data \(χ²\/dof = 37.2\)/);
   assert.deepEqual(w[1], { text: 'slow convergence', misfit: false });
   assert.match(adaptiveWarnings(status(12, [], { misfit: true, chi2_per_dof: null }))[0].text, /does not describe the data:/);
+  // The fit's own sentence about it, when it has one, is the one shown first (once).
+  const own = adaptiveWarnings(status(12, [], { misfit: true, chi2_per_dof: 9, warnings: ['slow', 'the model does not describe the data: χ²/dof = 9'] }));
+  assert.deepEqual(own, [{ text: 'the model does not describe the data: χ²/dof = 9', misfit: true }, { text: 'slow', misfit: false }]);
 });
 
 test('parameters as value ± u, relative u in per cent, and whether each is at its target', () => {
