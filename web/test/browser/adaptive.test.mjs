@@ -176,6 +176,26 @@ describe('adaptive scans', () => {
     await shot('05-misfit');
   });
 
+  it('shows a curve-mode scan\'s estimated error against its tolerance', async () => {
+    const tolerance = 0.02;
+    const s = await g.call('scan.submit', {
+      sample: 'brushed', name: 'curve', grids: ['in=45;out=-20:80:1'], wavelengths: '550',
+      adaptive: { mode: 'curve', tolerance, max_points: 101 },
+    });
+    await page.goto(`${g.url}/#/scan/${s.id}`, { waitUntil: 'load' });
+    await page.waitForSelector(`${$('scan-view')}[data-scan="${s.id}"] ${$('adaptive')}[data-mode="curve"]`, { timeout: T });
+    await waitData($('adaptive'), 'scanState', 'eq', 'completed', SCAN);
+    const a = (await g.call('scan.get', { scan: s.id })).adaptive;
+    await waitData($('adaptive-state'), 'state', 'eq', a.state);
+    await waitData($('adaptive-error'), 'value', 'eq', String(a.estimated_error));
+    assert.match(await page.$eval($('adaptive-error'), (e) => e.textContent), /estimated error [\d.]+ % \(tolerance 2 %\)/);
+    await waitData($('adaptive-chosen'), 'count', 'eq', a.points_used);
+    await waitData($('adaptive-plot'), 'rows', 'ge', 2);
+    assert.equal(await page.$eval($('adaptive-plot'), (e) => e.dataset.series), '1');
+    assert.equal(await page.$$($('adaptive-param')).then((l) => l.length), 0);
+    await shot('06-curve');
+  });
+
   it('met no page errors and no CSP violations', () => {
     assert.deepEqual(problems, []);
   });
