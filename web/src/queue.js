@@ -1,13 +1,23 @@
 // The queue: the running scan and the waiting ones (queued, paused, interrupted) with their actions,
 // and the submit form, whose API errors are shown at the field they name.
 import { useState } from 'preact/hooks';
-import { html, Field, fieldErrors } from './ui.js';
-import { can, scanActions, submitParams } from './logic.js';
+import { html, Field } from './ui.js';
+import { can, describeError, scanActions, submitFieldOf, submitParams } from './logic.js';
 
-const FIELDS = ['sample', 'name', 'grids', 'geometries', 'wavelengths', 'repeats', 'reference', 'priority'];
+const FIELDS = ['sample', 'name', 'grids', 'geometries', 'wavelengths', 'repeats', 'reference', 'priority',
+  'adaptive', 'model', 'target_rel_u', 'tolerance', 'max_points'];
+
+// Errors of a failed scan.submit split into the one of a form field (an adaptive plan's keys
+// have fields of their own: "adaptive.model" → model) and the rest.
+function submitErrors(err) {
+  const d = describeError(err);
+  const f = submitFieldOf(d.path);
+  return f && FIELDS.includes(f) ? { [f]: d.message } : { _form: d.message };
+}
 
 export function SubmitForm({ samples, call, onSubmitted }) {
-  const [form, setForm] = useState({ sample: '', name: '', grids: 'in=45;out=-30:80:2', wavelengths: '400:700:10', repeats: '1', reference: 'every_point', interval: '10', priority: '0' });
+  const [form, setForm] = useState({ sample: '', name: '', grids: 'in=45;out=-30:80:2', wavelengths: '400:700:10', repeats: '1', reference: 'every_point', interval: '10', priority: '0',
+    adaptive: 'off', model: '', target_rel_u: '0.02', tolerance: '0.01', max_points: '40' });
   const [errors, setErrors] = useState({});
   const [busy, setBusy] = useState(false);
   const set = (k) => (e) => setForm({ ...form, [k]: e.currentTarget.value });
@@ -20,7 +30,7 @@ export function SubmitForm({ samples, call, onSubmitted }) {
       setErrors({});
       onSubmitted(scan);
     } catch (err) {
-      const fe = fieldErrors(err, FIELDS);
+      const fe = submitErrors(err);
       if (fe.geometries) fe.grids = fe.geometries; // the form has one field for both
       setErrors(fe);
     }
@@ -50,6 +60,19 @@ export function SubmitForm({ samples, call, onSubmitted }) {
         </select>`}<//>
       ${form.reference === 'interval' && html`<${Field} name="interval" label="n" error=${errors.interval}>${input('interval', 'number', { min: 1 })}<//>`}
     </div>
+    <${Field} name="adaptive" label="Adaptive" error=${errors.adaptive} hint="the grid's geometries are candidates: the twin chooses which to measure">${(id, d) => html`
+      <select id=${id} name="adaptive" value=${form.adaptive} onChange=${set('adaptive')} aria-describedby=${d}>
+        <option value="off">no: measure every geometry</option>
+        <option value="parameters">parameters: fit a model to a target uncertainty</option>
+        <option value="curve">curve: interpolate within a tolerance</option>
+      </select>`}<//>
+    ${form.adaptive === 'parameters' && html`<${Field} name="model" label="Model (free parameters marked ?)" error=${errors.model} hint="e.g. conductor:alpha=?,eta=0.2,k=3.9">${input('model')}<//>`}
+    ${form.adaptive !== 'off' && html`<div class="row">
+      ${form.adaptive === 'parameters'
+        ? html`<${Field} name="target_rel_u" label="Target u/|value|" error=${errors.target_rel_u}>${input('target_rel_u', 'text', { inputmode: 'decimal' })}<//>`
+        : html`<${Field} name="tolerance" label="Tolerance (relative)" error=${errors.tolerance}>${input('tolerance', 'text', { inputmode: 'decimal' })}<//>`}
+      <${Field} name="max_points" label="Points at most" error=${errors.max_points}>${input('max_points', 'number', { min: 1 })}<//>
+    </div>`}
     ${errors._form && html`<div class="form-error" role="alert" data-testid="submit-error">${errors._form}</div>`}
     <button type="submit" data-testid="scan-submit-button" disabled=${busy || !sample}>Submit scan</button>
   </form>`;

@@ -3,9 +3,10 @@
 // clicked point's spectra and colours, and the exports.
 import { useEffect, useMemo, useRef, useState } from 'preact/hooks';
 import { html, download } from './ui.js';
-import { POINTS_PAGE, Curve, budgetRows, channelOf, coalesce, exportFile, fmt, incidences, verdictBadge } from './logic.js';
+import { POINTS_PAGE, AdaptiveTrack, Curve, budgetRows, candidateMarks, channelOf, coalesce, exportFile, fmt, incidences, verdictBadge } from './logic.js';
 import { betaPlot, betaData, lanePlot, laneData, spectrumPlot } from './plot.js';
 import { colourOf } from './colour.js';
+import { AdaptivePanel } from './adaptive.js';
 import tables from 'virtual:colour-tables';
 
 // Draws into the two plots, coalescing the points that arrive between frames.
@@ -78,7 +79,10 @@ function VerdictBadge({ verdict }) {
 }
 
 // fitted: null, or (θi, θr, nm) → β of a fitted model, drawn over the points. onScan(scan):
-// each scan.get result (its verdict and fits), for the view around the panel.
+// each scan.get result (its verdict and fits), for the view around the panel. An adaptive
+// scan also shows its loop (adaptive.js): the status from scan.get, then from every
+// scan.progress (each one kept for the uncertainty plot, none coalesced away), and its
+// candidates along the β plot's θr axis.
 export function ScanPanel({ scanId, call, bus, thresholds, notify, fitted = null, onScan = null, reloads = 0, empty = 'Submit a scan or pick one in the queue.' }) {
   const [scan, setScan] = useState(null);
   const [nm, setNm] = useState(550);
@@ -86,7 +90,7 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify, fitted = null
   const [log, setLog] = useState(false);
   const [picked, setPicked] = useState(null);
   const [version, setVersion] = useState(0); // bumps when the point set is reloaded
-  const store = useRef({ points: new Map() });
+  const store = useRef({ points: new Map(), candidates: null, track: new AdaptiveTrack() });
   const live = useRef(new LivePlots());
   const betaEl = useRef(null), laneEl = useRef(null), hostEl = useRef(null);
 
@@ -95,7 +99,8 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify, fitted = null
     if (!scanId) return undefined;
     let gone = false;
     const points = new Map();
-    store.current = { points };
+    const track = new AdaptiveTrack();
+    store.current = { points, candidates: null, track };
     setPicked(null);
     const take = (p) => {
       if (p.scan_id !== scanId || points.has(p.index)) return;
@@ -105,8 +110,15 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify, fitted = null
     const off = bus.on('scan.point', take);
     (async () => {
       try {
-        const s = await call('scan.get', { scan: scanId });
+        let s = await call('scan.get', { scan: scanId });
         if (gone) return;
+        if (s.plan.adaptive) {
+          // The candidates: the plan's geometries, which scan.get leaves out unless asked.
+          s = await call('scan.get', { scan: scanId, geometries: true });
+          if (gone) return;
+          store.current.candidates = s.plan.geometries || [];
+          track.add(s.adaptive);
+        }
         setScan(s);
         if (onScan) onScan(s);
         const wl = s.plan.wavelengths;
@@ -123,14 +135,20 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify, fitted = null
         setVersion((v) => v + 1);
       } catch (e) { if (!gone) notify(`scan ${scanId}: ${e.message}`); }
     })();
-    const progress = coalesce((p) => setScan((s) => (s ? { ...s, state: p.state, points_done: p.points_done, points_total: p.points_total, points_diverged: p.points_diverged } : s)), 250);
+    const progress = coalesce((p) => setScan((s) => (s ? { ...s, state: p.state, points_done: p.points_done, points_total: p.points_total, points_diverged: p.points_diverged, adaptive: track.latest ?? s.adaptive } : s)), 250);
     // The verdict firms up with every point: read again at most every 2 s while points come.
     const verdict = coalesce(() => call('scan.get', { scan: scanId }).then((s) => {
       if (gone) return;
-      setScan((cur) => (cur ? { ...cur, verdict: s.verdict, fits: s.fits, state: s.state, finished_at: s.finished_at } : s));
+      if (s.plan.adaptive) track.add(s.adaptive);
+      setScan((cur) => (cur ? { ...cur, verdict: s.verdict, fits: s.fits, state: s.state, finished_at: s.finished_at, reason: s.reason, adaptive: track.latest ?? s.adaptive } : s));
       if (onScan) onScan(s);
     }, () => {}), 2000);
-    const offState = bus.on('scan.progress', (p) => { if (p.scan === scanId) { progress(p); verdict(); } });
+    const offState = bus.on('scan.progress', (p) => {
+      if (p.scan !== scanId) return;
+      if (p.adaptive) track.add(p.adaptive);
+      progress(p);
+      verdict();
+    });
     return () => { gone = true; off(); offState(); };
   }, [scanId, reloads]);
 
@@ -147,7 +165,8 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify, fitted = null
     store.current.log = log;
     store.current.fitted = fitted;
     const width = Math.max(320, hostEl.current.clientWidth || 640);
-    const beta = betaPlot(betaEl.current, curve, { log, width, height: 300, fitted, onPick: (i) => setPicked(store.current.points.get(i) || null) });
+    const marks = scan.plan.adaptive ? () => candidateMarks(store.current.candidates, [...store.current.points.values()], curve.thetaI) : null;
+    const beta = betaPlot(betaEl.current, curve, { log, width, height: 300, fitted, marks, onPick: (i) => setPicked(store.current.points.get(i) || null) });
     const lane = lanePlot(laneEl.current, curve, { zThreshold: thresholds && thresholds.z_threshold, dEThreshold: thresholds && thresholds.delta_e_threshold, width, height: 170 });
     live.current.beta = beta;
     live.current.lane = lane;
@@ -191,6 +210,8 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify, fitted = null
     </div>
     <p class="muted">Click a point (or give its index) for its spectra and colours. Thresholds: max |z| ${fmt(thresholds && thresholds.z_threshold, 3)}, ΔE00 ${fmt(thresholds && thresholds.delta_e_threshold, 3)}.</p>
     ${picked && html`<${PointDetails} point=${picked} nm=${nm} />`}
+    ${scan && scan.plan.adaptive && html`<${AdaptivePanel} scan=${scan} status=${store.current.track.latest ?? scan.adaptive} track=${store.current.track}
+      points=${[...store.current.points.values()]} candidates=${store.current.candidates} />`}
   </section>`;
 }
 

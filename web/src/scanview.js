@@ -152,7 +152,8 @@ export function ScanView({ scanId, samples, status, role, call, bus, thresholds,
   const sample = scan ? samples.find((x) => x.id === scan.plan.sample) : null;
   const fits = useMemo(() => {
     const seen = new Set();
-    return [...extraFits, ...((scan && scan.fits) || [])].filter((f) => (f.id == null || !seen.has(f.id)) && (seen.add(f.id), true))
+    // An adaptive scan's loop state is stored as a fit of its own kind: its panel shows it.
+    return [...extraFits, ...((scan && scan.fits) || [])].filter((f) => f.kind !== 'adaptive' && (f.id == null || !seen.has(f.id)) && (seen.add(f.id), true))
       .sort((a, b) => (b.id || 0) - (a.id || 0));
   }, [scan, extraFits]);
 

@@ -12,9 +12,10 @@ export const TRUE_SAMPLE = 'lambert:albedo=0.6'; // the mock lab's hidden sample
 export class Goniod {
   // exe: the goniod binary; webRoot: the built dist/ (null: server.web_root not set, so goniod
   // looks for its own); timeScale: the mock's real seconds per virtual second (small: fast
-  // scans).
-  constructor({ exe, webRoot, timeScale = 0.3, extra = '' }) {
-    Object.assign(this, { exe, webRoot, timeScale, extra });
+  // scans); sample: the mock lab's hidden sample; lab: more keys of the mock lab
+  // ([instrument.motion], e.g. its detector's full scale).
+  constructor({ exe, webRoot, timeScale = 0.3, extra = '', sample = TRUE_SAMPLE, lab = '' }) {
+    Object.assign(this, { exe, webRoot, timeScale, extra, sample, lab });
     this.state = mkdtempSync(join(tmpdir(), 'gonio-web-'));
     this.port = 0;
   }
@@ -26,8 +27,9 @@ ${this.webRoot === null ? '' : `web_root = "${this.webRoot}"\n`}log_level = "deb
 
 [instrument.motion]
 driver = "mock"
-sample = "${TRUE_SAMPLE}"
+sample = "${this.sample}"
 time_scale = ${this.timeScale}
+${this.lab}
 
 [instrument.photometer]
 driver = "mock"
