@@ -54,6 +54,7 @@ AdaptiveLoop::AdaptiveLoop(const ScanPlan& plan, const twin::InstrumentProfile& 
     : reachable_(std::move(reachable)) {
   if (!plan.adaptive) throw Error::invalid("adaptive", "the plan is not adaptive");
   design_ = make_design(plan, profile);
+  design_->set_movable(reachable_);
   seeds_ = design_->seeds();
   counts_.assign(plan.geometries.size(), 0);
   status_ = design_->status();
@@ -86,12 +87,14 @@ void AdaptiveLoop::catch_up() {
 }
 
 std::optional<std::size_t> AdaptiveLoop::choose(const std::vector<std::size_t>& pending, const Geometry& arms) {
-  // The seeds first (those still readable and reachable), then the design's choice.
+  // The seeds first (those still readable and reachable), then the design's choice —
+  // none once the points in hand already reach the target.
   while (taken_ < seeds_.size()) {
     const auto c = seeds_[taken_];
     if (design_->available(c, pending) && reachable_(arms, design_->candidates()[c])) return c;
     ++taken_;
   }
+  if (design_->target_reached()) return std::nullopt;
   return design_->next(pending, arms);
 }
 

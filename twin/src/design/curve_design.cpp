@@ -247,7 +247,7 @@ std::optional<std::size_t> CurveDesign::next(const std::vector<std::size_t>& pen
       for (const auto c : gap)
         if (error_[c] > error_[worst] * (1 + 1e-9)) worst = c;
       gap.clear();
-      if (error_[worst] <= options_.tolerance) return;
+      if (error_[worst] <= options_.tolerance || !movable(arms, worst)) return;
       const double s = options_.timing.point_s(arms, candidates_[worst]);
       if (s < best_s) {
         best_s = s;

@@ -174,7 +174,7 @@ std::optional<std::size_t> ParameterDesign::next(const std::vector<std::size_t>&
   std::optional<std::size_t> best;
   double best_score = -1;
   for (std::size_t c = 0; c < candidates_.size(); ++c) {
-    if (!available(c, pending)) continue;
+    if (!available(c, pending) || !movable(arms, c)) continue;
     const double seconds = std::max(1e-3, options_.timing.point_s(arms, candidates_[c]));
     const double score = log_det_gain(inv, c) / seconds;
     if (score > best_score) {

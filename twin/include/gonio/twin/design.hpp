@@ -24,6 +24,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -99,6 +100,10 @@ class Design {
   int max_readings() const noexcept { return max_readings_; }
   // Whether c may be chosen with `pending` chosen before it.
   bool available(std::size_t c, const std::vector<std::size_t>& pending) const;
+  // Restricts next() to the moves the instrument can make from where the arms stand (the
+  // motion guard's rule); by default every move is allowed.
+  using Movable = std::function<bool(const Geometry& from, const Geometry& to)>;
+  void set_movable(Movable m) { movable_ = std::move(m); }
 
  protected:
   Design(std::vector<Geometry> candidates, int max_readings);
@@ -107,6 +112,8 @@ class Design {
   std::vector<std::size_t> measured_;  // in the order measured (a candidate read again recurs)
   std::vector<int> readings_;
   int max_readings_ = 1;
+  Movable movable_;
+  bool movable(const Geometry& from, std::size_t c) const { return !movable_ || movable_(from, candidates_[c]); }
 };
 
 struct ParameterDesignOptions {
