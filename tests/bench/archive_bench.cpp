@@ -15,9 +15,9 @@
 #include <memory>
 
 #include "../integration/archive/servers.hpp"
-#include "gonio/daemon/archive.hpp"
-#include "gonio/daemon/mqtt.hpp"
-#include "gonio/daemon/store.hpp"
+#include "gonio/daemon/fleet/archive.hpp"
+#include "gonio/daemon/fleet/mqtt.hpp"
+#include "gonio/daemon/store/store.hpp"
 #include "gonio/proto/point.hpp"
 
 namespace gonio::daemon {

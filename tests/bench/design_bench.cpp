@@ -27,7 +27,7 @@ void BM_AdaptiveChoice(benchmark::State& state) {
   ParameterDesignOptions o;
   o.threads = 2;
   o.fit.threads = 2;
-  o.fit.samples = 1u << 12;  // goniod's refit budget (daemon/src/adaptive_loop.cpp)
+  o.fit.samples = 1u << 12;  // goniod's refit budget (daemon/src/instrument/adaptive_loop.cpp)
   o.fit.replicates = 8;
   o.fit.max_iterations = 30;
   ParameterDesign d("conductor:alpha=?,eta=0.2,k=3.9", cand, grid, InstrumentProfile{}, o);

@@ -48,9 +48,9 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "gonio/daemon/client.hpp"
-#include "gonio/daemon/config.hpp"
-#include "gonio/daemon/ctl.hpp"
+#include "gonio/daemon/config/config.hpp"
+#include "gonio/daemon/ctl/client.hpp"
+#include "gonio/daemon/ctl/ctl.hpp"
 
 namespace fs = std::filesystem;
 using gonio::daemon::Client;

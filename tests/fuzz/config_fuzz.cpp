@@ -8,7 +8,7 @@
 
 #include <spdlog/spdlog.h>
 
-#include "gonio/daemon/config.hpp"
+#include "gonio/daemon/config/config.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/registry/registry.hpp"
 

@@ -23,15 +23,15 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
-#include "gonio/daemon/alerts.hpp"
-#include "gonio/daemon/auth.hpp"
-#include "gonio/daemon/config.hpp"
-#include "gonio/daemon/hub.hpp"
-#include "gonio/daemon/instrument.hpp"
-#include "gonio/daemon/methods.hpp"
-#include "gonio/daemon/rpc.hpp"
-#include "gonio/daemon/store.hpp"
-#include "gonio/daemon/twin_service.hpp"
+#include "gonio/daemon/config/config.hpp"
+#include "gonio/daemon/instrument/alerts.hpp"
+#include "gonio/daemon/instrument/instrument.hpp"
+#include "gonio/daemon/instrument/twin_service.hpp"
+#include "gonio/daemon/methods/methods.hpp"
+#include "gonio/daemon/rpc/auth.hpp"
+#include "gonio/daemon/rpc/hub.hpp"
+#include "gonio/daemon/rpc/rpc.hpp"
+#include "gonio/daemon/store/store.hpp"
 #include "gonio/twin/instrument.hpp"
 
 namespace gonio::fuzz {

@@ -21,7 +21,7 @@
 #include <boost/asio/io_context.hpp>
 
 #include "daemon_fuzz.hpp"
-#include "gonio/daemon/net.hpp"
+#include "gonio/daemon/net/net.hpp"
 
 namespace {
 

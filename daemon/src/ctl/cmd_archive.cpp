@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include "ctl/ctl_internal.hpp"
-#include "gonio/daemon/ctl.hpp"
+#include "gonio/daemon/ctl/ctl.hpp"
 
 namespace gonio::daemon::ctl {
 

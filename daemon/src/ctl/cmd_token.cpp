@@ -7,8 +7,8 @@
 #include <CLI/CLI.hpp>
 
 #include "ctl/ctl_internal.hpp"
-#include "gonio/daemon/auth.hpp"
-#include "gonio/daemon/ctl.hpp"
+#include "gonio/daemon/ctl/ctl.hpp"
+#include "gonio/daemon/rpc/auth.hpp"
 
 namespace gonio::daemon::ctl {
 

@@ -8,7 +8,7 @@
 #include <CLI/CLI.hpp>
 
 #include "ctl/ctl_internal.hpp"
-#include "gonio/daemon/ctl.hpp"
+#include "gonio/daemon/ctl/ctl.hpp"
 
 namespace gonio::daemon::ctl {
 

@@ -8,10 +8,10 @@
 #include <fmt/format.h>
 
 #include "ctl/ctl_internal.hpp"
-#include "gonio/daemon/ctl.hpp"
-#include "gonio/daemon/rpc.hpp"
-#include "gonio/proto/version.hpp"
+#include "gonio/daemon/ctl/ctl.hpp"
+#include "gonio/daemon/rpc/rpc.hpp"
 #include "gonio/proto/error.hpp"
+#include "gonio/proto/version.hpp"
 
 
 namespace gonio::daemon {

@@ -11,7 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "gonio/daemon/client.hpp"
+#include "gonio/daemon/ctl/client.hpp"
 
 namespace CLI {
 class App;

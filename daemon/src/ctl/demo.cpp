@@ -18,8 +18,8 @@
 #include <fmt/format.h>
 
 #include "ctl/ctl_internal.hpp"
-#include "gonio/daemon/config.hpp"
-#include "gonio/daemon/ctl.hpp"
+#include "gonio/daemon/config/config.hpp"
+#include "gonio/daemon/ctl/ctl.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/plot.hpp"
 

@@ -4,8 +4,8 @@
 
 #include <fmt/format.h>
 
-#include "gonio/daemon/ctl.hpp"
-#include "gonio/daemon/rpc.hpp"
+#include "gonio/daemon/ctl/ctl.hpp"
+#include "gonio/daemon/rpc/rpc.hpp"
 
 namespace gonio::daemon {
 namespace {

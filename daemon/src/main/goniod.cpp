@@ -4,7 +4,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "gonio/daemon/daemon.hpp"
+#include "gonio/daemon/startup/daemon.hpp"
 #include "gonio/proto/version.hpp"
 
 int main(int argc, char** argv) {

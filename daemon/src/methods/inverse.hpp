@@ -7,7 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "gonio/daemon/methods.hpp"
+#include "gonio/daemon/methods/methods.hpp"
 #include "gonio/proto/json_util.hpp"
 #include "gonio/twin/fit.hpp"
 

@@ -9,9 +9,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "gonio/daemon/auth.hpp"
-#include "gonio/daemon/rpc.hpp"
-#include "gonio/daemon/store.hpp"
+#include "gonio/daemon/rpc/auth.hpp"
+#include "gonio/daemon/rpc/rpc.hpp"
+#include "gonio/daemon/store/store.hpp"
 #include "gonio/proto/json_util.hpp"
 
 namespace gonio::daemon::methods {

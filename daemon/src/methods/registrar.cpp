@@ -3,7 +3,7 @@
 
 #include <fmt/format.h>
 
-#include "gonio/daemon/method_table.hpp"
+#include "gonio/daemon/methods/method_table.hpp"
 
 namespace gonio::daemon {
 

@@ -1,5 +1,5 @@
 // MethodRegistrar: attaches the handlers of daemon/src/methods/*.cpp to the entries of the
-// method table (gonio/daemon/method_table.hpp), which alone gives each method its role and
+// method table (gonio/daemon/methods/method_table.hpp), which alone gives each method its role and
 // whether it blocks; and the register_<area> function of each method family.
 #pragma once
 
@@ -7,8 +7,8 @@
 #include <string>
 #include <string_view>
 
-#include "gonio/daemon/methods.hpp"
-#include "gonio/daemon/rpc.hpp"
+#include "gonio/daemon/methods/methods.hpp"
+#include "gonio/daemon/rpc/rpc.hpp"
 
 namespace gonio::daemon {
 

@@ -5,8 +5,8 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include "gonio/daemon/adaptive_loop.hpp"
-#include "gonio/daemon/export.hpp"
+#include "gonio/daemon/instrument/adaptive_loop.hpp"
+#include "gonio/daemon/store/export.hpp"
 #include "methods/inverse.hpp"
 #include "methods/params.hpp"
 #include "methods/registrar.hpp"

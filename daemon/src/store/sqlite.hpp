@@ -18,7 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "gonio/daemon/store.hpp"
+#include "gonio/daemon/store/store.hpp"
 
 namespace gonio::daemon {
 

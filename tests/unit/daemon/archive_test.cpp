@@ -9,10 +9,10 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/archive.hpp"
-#include "gonio/daemon/config.hpp"
-#include "gonio/daemon/mqtt.hpp"
-#include "gonio/daemon/store.hpp"
+#include "gonio/daemon/config/config.hpp"
+#include "gonio/daemon/fleet/archive.hpp"
+#include "gonio/daemon/fleet/mqtt.hpp"
+#include "gonio/daemon/store/store.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/point.hpp"
 

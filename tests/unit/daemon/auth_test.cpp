@@ -8,8 +8,8 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/auth.hpp"
-#include "gonio/daemon/store.hpp"
+#include "gonio/daemon/rpc/auth.hpp"
+#include "gonio/daemon/store/store.hpp"
 
 namespace gonio::daemon {
 namespace {

@@ -2,7 +2,7 @@
 // under-exposed up to the maximum and below any setting that saturated.
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/autorange.hpp"
+#include "gonio/daemon/instrument/autorange.hpp"
 
 namespace gonio::daemon {
 namespace {

@@ -8,8 +8,8 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/config.hpp"
-#include "gonio/daemon/daemon.hpp"
+#include "gonio/daemon/config/config.hpp"
+#include "gonio/daemon/startup/daemon.hpp"
 
 namespace gonio::daemon {
 namespace {

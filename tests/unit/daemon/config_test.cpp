@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/config.hpp"
+#include "gonio/daemon/config/config.hpp"
 #include "gonio/drivers/modbus/modbus_motion.hpp"
 #include "gonio/proto/error.hpp"
 

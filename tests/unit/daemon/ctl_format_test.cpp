@@ -1,8 +1,8 @@
 // gonioctl's text output and exit codes.
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/ctl.hpp"
-#include "gonio/daemon/rpc.hpp"
+#include "gonio/daemon/ctl/ctl.hpp"
+#include "gonio/daemon/rpc/rpc.hpp"
 
 namespace gonio::daemon {
 namespace {

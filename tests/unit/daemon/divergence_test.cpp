@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/divergence.hpp"
+#include "gonio/daemon/instrument/divergence.hpp"
 
 namespace gonio::daemon {
 namespace {

@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/export.hpp"
+#include "gonio/daemon/store/export.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/bsdf_io.hpp"
 

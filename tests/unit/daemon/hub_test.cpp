@@ -1,7 +1,7 @@
 // Subscriptions: topics, scan filters, full queues, sessions that are gone.
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/hub.hpp"
+#include "gonio/daemon/rpc/hub.hpp"
 
 namespace gonio::daemon {
 namespace {

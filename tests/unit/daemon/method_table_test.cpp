@@ -1,4 +1,4 @@
-// The method table (gonio/daemon/method_table.hpp) against the three other places a method
+// The method table (gonio/daemon/methods/method_table.hpp) against the three other places a method
 // and its role appear: the handlers goniod registers, proto/openrpc.json (x-role and the
 // "Role: ..." of each description) and the method table of daemon/README.md. Any
 // disagreement fails.
@@ -15,9 +15,9 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/method_table.hpp"
-#include "gonio/daemon/methods.hpp"
-#include "gonio/daemon/rpc.hpp"
+#include "gonio/daemon/methods/method_table.hpp"
+#include "gonio/daemon/methods/methods.hpp"
+#include "gonio/daemon/rpc/rpc.hpp"
 
 namespace gonio::daemon {
 namespace {

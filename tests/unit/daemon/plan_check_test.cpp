@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/plan_check.hpp"
+#include "gonio/daemon/instrument/plan_check.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::daemon {

@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/point_reduction.hpp"
+#include "gonio/daemon/instrument/point_reduction.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::daemon {

@@ -1,7 +1,7 @@
 // JSON-RPC 2.0 semantics of the dispatcher (independent of any transport).
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/rpc.hpp"
+#include "gonio/daemon/rpc/rpc.hpp"
 
 namespace gonio::daemon::rpc {
 namespace {

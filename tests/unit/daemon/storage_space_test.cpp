@@ -8,8 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/storage.hpp"
-#include "gonio/daemon/store.hpp"
+#include "gonio/daemon/store/storage.hpp"
+#include "gonio/daemon/store/store.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::daemon {

@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/store.hpp"
+#include "gonio/daemon/store/store.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::daemon {

@@ -7,9 +7,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "gonio/daemon/diagnosis.hpp"
-#include "gonio/daemon/scan_twin.hpp"
-#include "gonio/daemon/verdict.hpp"
+#include "gonio/daemon/instrument/diagnosis.hpp"
+#include "gonio/daemon/instrument/scan_twin.hpp"
+#include "gonio/daemon/instrument/verdict.hpp"
 
 namespace gonio::daemon {
 namespace {

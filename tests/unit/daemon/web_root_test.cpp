@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "gonio/daemon/web_root.hpp"
+#include "gonio/daemon/net/web_root.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::daemon {

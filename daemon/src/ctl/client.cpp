@@ -1,0 +1,196 @@
+// Blocking NDJSON JSON-RPC client (see client.hpp).
+#include "gonio/daemon/ctl/client.hpp"
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include <fmt/format.h>
+
+namespace gonio::daemon {
+
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+int remaining_ms(Clock::time_point deadline) {
+  const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
+  return ms < 0 ? 0 : static_cast<int>(std::min<long long>(ms, 1 << 30));
+}
+
+}  // namespace
+
+int connect_uri(const std::string& uri, std::chrono::milliseconds timeout) {
+  if (uri.starts_with("unix:")) {
+    const auto path = uri.substr(5);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    if (path.size() >= sizeof addr.sun_path) throw ConnectionError(fmt::format("{}: path too long", uri));
+    std::memcpy(addr.sun_path, path.c_str(), path.size() + 1);
+    const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (fd < 0) throw ConnectionError(fmt::format("socket: {}", std::strerror(errno)));
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+      const int e = errno;
+      ::close(fd);
+      throw ConnectionError(fmt::format("cannot connect to {}: {}", uri, std::strerror(e)));
+    }
+    return fd;
+  }
+  if (uri.starts_with("tcp://")) {
+    std::string rest = uri.substr(6), host, port;
+    if (!rest.empty() && rest.back() == '/') rest.pop_back();
+    if (!rest.empty() && rest.front() == '[') {
+      const auto close = rest.find("]:");
+      if (close == std::string::npos) throw ConnectionError(fmt::format("{}: bad address", uri));
+      host = rest.substr(1, close - 1), port = rest.substr(close + 2);
+    } else {
+      const auto colon = rest.rfind(':');
+      if (colon == std::string::npos) throw ConnectionError(fmt::format("{}: expected HOST:PORT", uri));
+      host = rest.substr(0, colon), port = rest.substr(colon + 1);
+    }
+    addrinfo hints{};
+    hints.ai_socktype = SOCK_STREAM;
+    addrinfo* res = nullptr;
+    if (const int rc = ::getaddrinfo(host.c_str(), port.c_str(), &hints, &res); rc != 0)
+      throw ConnectionError(fmt::format("{}: {}", uri, gai_strerror(rc)));
+    int fd = -1;
+    std::string last = "no address";
+    for (auto* ai = res; ai; ai = ai->ai_next) {
+      fd = ::socket(ai->ai_family, ai->ai_socktype | SOCK_CLOEXEC | SOCK_NONBLOCK, ai->ai_protocol);
+      if (fd < 0) continue;
+      int rc = ::connect(fd, ai->ai_addr, ai->ai_addrlen);
+      if (rc != 0 && errno == EINPROGRESS) {
+        pollfd p{fd, POLLOUT, 0};
+        rc = ::poll(&p, 1, static_cast<int>(timeout.count())) == 1 ? 0 : -1;
+        int err = 0;
+        socklen_t len = sizeof err;
+        if (rc == 0 && (::getsockopt(fd, SOL_SOCKET, SO_ERROR, &err, &len) != 0 || err != 0)) {
+          errno = err ? err : errno;
+          rc = -1;
+        } else if (rc != 0) {
+          errno = ETIMEDOUT;
+        }
+      }
+      if (rc == 0) {
+        ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+        int one = 1;
+        ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+        break;
+      }
+      last = std::strerror(errno);
+      ::close(fd);
+      fd = -1;
+    }
+    ::freeaddrinfo(res);
+    if (fd < 0) throw ConnectionError(fmt::format("cannot connect to {}: {}", uri, last));
+    return fd;
+  }
+  throw ConnectionError(fmt::format("'{}' is not unix:PATH or tcp://HOST:PORT", uri));
+}
+
+Client::Client(const std::string& uri, std::chrono::milliseconds timeout)
+    : fd_(connect_uri(uri, timeout)), uri_(uri), timeout_(timeout) {}
+
+Client::~Client() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+Client::Client(Client&& o) noexcept
+    : fd_(o.fd_), uri_(std::move(o.uri_)), timeout_(o.timeout_), buffer_(std::move(o.buffer_)),
+      notifications_(std::move(o.notifications_)), next_id_(o.next_id_) {
+  o.fd_ = -1;
+}
+
+void Client::send_line(const std::string& line) {
+  std::string data = line + "\n";
+  std::size_t off = 0;
+  while (off < data.size()) {
+    const auto n = ::send(fd_, data.data() + off, data.size() - off, MSG_NOSIGNAL);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw ConnectionError(fmt::format("{}: send: {}", uri_, std::strerror(errno)));
+    }
+    off += static_cast<std::size_t>(n);
+  }
+}
+
+std::optional<std::string> Client::read_line(std::chrono::milliseconds timeout) {
+  const auto deadline = Clock::now() + timeout;
+  for (;;) {
+    if (const auto nl = buffer_.find('\n'); nl != std::string::npos) {
+      std::string line = buffer_.substr(0, nl);
+      buffer_.erase(0, nl + 1);
+      return line;
+    }
+    pollfd p{fd_, POLLIN, 0};
+    const int rc = ::poll(&p, 1, remaining_ms(deadline));
+    if (rc < 0 && errno == EINTR) continue;
+    if (rc < 0) throw ConnectionError(fmt::format("{}: poll: {}", uri_, std::strerror(errno)));
+    if (rc == 0) return std::nullopt;
+    char buf[65536];
+    const auto n = ::recv(fd_, buf, sizeof buf, 0);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw ConnectionError(fmt::format("{}: recv: {}", uri_, std::strerror(errno)));
+    if (n == 0) throw ConnectionError(fmt::format("{}: the server closed the connection", uri_));
+    buffer_.append(buf, static_cast<std::size_t>(n));
+  }
+}
+
+json Client::call(const std::string& method, const json& params) {
+  const auto id = next_id_++;
+  send_line(json{{"jsonrpc", "2.0"}, {"id", id}, {"method", method}, {"params", params}}.dump());
+  const auto deadline = Clock::now() + timeout_;
+  for (;;) {
+    const auto line = read_line(std::chrono::milliseconds(remaining_ms(deadline)));
+    if (!line) throw ConnectionError(fmt::format("{}: no answer to {} within {} s", uri_, method,
+                                                 timeout_.count() / 1000.0));
+    json msg = json::parse(*line, nullptr, false);
+    if (msg.is_discarded()) throw ConnectionError(fmt::format("{}: unreadable reply", uri_));
+    if (!msg.contains("id")) {
+      notifications_.push_back(std::move(msg));
+      continue;
+    }
+    if (msg["id"] != json(id)) {
+      if (msg["id"].is_null() && msg.contains("error")) {
+        const auto& e = msg["error"];
+        throw RpcError(e.value("code", 0), e.value("message", ""), e.value("data", json::object()));
+      }
+      continue;  // an answer to something else
+    }
+    if (msg.contains("error")) {
+      const auto& e = msg["error"];
+      throw RpcError(e.value("code", 0), e.value("message", ""), e.value("data", json::object()));
+    }
+    return msg["result"];
+  }
+}
+
+json Client::login(const std::string& token) { return call("auth.login", json{{"token", token}}); }
+
+std::optional<json> Client::next_notification(std::chrono::milliseconds timeout) {
+  if (!notifications_.empty()) {
+    auto n = std::move(notifications_.front());
+    notifications_.pop_front();
+    return n;
+  }
+  const auto deadline = Clock::now() + timeout;
+  for (;;) {
+    const auto line = read_line(std::chrono::milliseconds(remaining_ms(deadline)));
+    if (!line) return std::nullopt;
+    json msg = json::parse(*line, nullptr, false);
+    if (msg.is_discarded()) continue;
+    if (!msg.contains("id")) return msg;
+  }
+}
+
+}  // namespace gonio::daemon

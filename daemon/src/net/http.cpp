@@ -1,0 +1,615 @@
+// HTTP POST /rpc and WebSocket /ws via Boost.Beast (see net.hpp).
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <mutex>
+
+#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange without it
+
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <boost/asio/strand.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "gonio/daemon/net/net.hpp"
+#include "net/accept.hpp"
+#include "net/session.hpp"
+
+namespace gonio::daemon::net {
+
+namespace asio = boost::asio;
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+using boost::system::error_code;
+using tcp = asio::ip::tcp;
+using nlohmann::json;
+
+namespace {
+
+constexpr std::size_t kHeaderLimit = 16 * 1024;
+
+class WsSession;
+
+struct HttpState {
+  Context ctx;
+  std::atomic<std::size_t> connections{0}, accepted{0}, dropped{0}, websockets{0};
+  std::mutex mu;
+  std::vector<std::weak_ptr<WsSession>> ws;  // for ending the sessions of a revoked token
+  // Who to close on shutdown; expired entries are pruned as new ones arrive.
+  std::vector<std::pair<std::weak_ptr<void>, std::function<void()>>> closers;
+  explicit HttpState(const Context& c) : ctx(c) {}
+  void add_closer(std::weak_ptr<void> owner, std::function<void()> f) {
+    std::lock_guard lock(mu);
+    std::erase_if(closers, [](const auto& c) { return c.first.expired(); });
+    closers.emplace_back(std::move(owner), std::move(f));
+  }
+};
+
+// "Bearer TOKEN" → TOKEN (scheme case-insensitive, RFC 6750 §2.1); empty when absent.
+std::string bearer(beast::string_view header) {
+  std::string h(header);
+  if (h.size() < 7) return {};
+  std::string scheme = h.substr(0, 7);
+  for (auto& ch : scheme) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  if (scheme != "bearer ") return {};
+  auto token = h.substr(7);
+  while (!token.empty() && token.front() == ' ') token.erase(0, 1);
+  while (!token.empty() && token.back() == ' ') token.pop_back();
+  return token;
+}
+
+std::string error_body(int code, std::string_view msg, Errc errc, std::string_view field = {}) {
+  // msg may quote the peer's bytes (the target, Origin, Content-Type): never UTF-8 by promise.
+  return rpc::json_text(json{{"jsonrpc", "2.0"}, {"error", rpc::error_object(code, msg, errc, field)}, {"id", nullptr}});
+}
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  for (auto& ch : out) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return out;
+}
+
+// Whether a browser's Origin may talk to this listener: its own host (the Host header the
+// browser sent with it) or one of server.allowed_origins. "null" (sandboxed frames, files)
+// never may.
+bool origin_allowed(std::string_view origin, std::string_view host, const Limits& limits) {
+  const auto o = lower(origin);
+  for (const auto& a : limits.allowed_origins)
+    if (lower(a) == o) return true;
+  if (host.empty()) return false;
+  return o == "http://" + lower(host) || o == "https://" + lower(host);
+}
+
+bool listed_origin(std::string_view origin, const Limits& limits) {
+  const auto o = lower(origin);
+  for (const auto& a : limits.allowed_origins)
+    if (lower(a) == o) return true;
+  return false;
+}
+
+// "application/json" with optional parameters ("; charset=utf-8"), any case.
+bool is_json_media_type(std::string_view content_type) {
+  auto t = lower(content_type.substr(0, content_type.find(';')));
+  while (!t.empty() && t.back() == ' ') t.pop_back();
+  while (!t.empty() && t.front() == ' ') t.erase(0, 1);
+  return t == "application/json";
+}
+
+// The dashboard's Content-Security-Policy: nothing but its own files, no inline script or
+// style, and connections only back to this listener (the WebSocket by the Host the browser
+// used; a Host that is not a plain host[:port] gets 'self' alone).
+std::string content_security_policy(std::string_view host) {
+  const bool plain = !host.empty() && host.size() <= 255 &&
+                     std::all_of(host.begin(), host.end(), [](char c) {
+                       return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' ||
+                              c == ':' || c == '[' || c == ']';
+                     });
+  const auto ws = plain ? fmt::format(" ws://{0} wss://{0}", host) : std::string{};
+  return fmt::format("default-src 'self'; script-src 'self'; style-src 'self'; img-src 'self' data: blob:; "
+                     "connect-src 'self'{}; object-src 'none'; base-uri 'none'; form-action 'self'; "
+                     "frame-ancestors 'none'",
+                     ws);
+}
+
+// A request over HTTP POST: no notifications can reach it.
+class OneShot final : public rpc::Session {
+ public:
+  OneShot(std::string peer, Principal p) : rpc::Session("http", std::move(peer), false) {
+    set_principal(std::move(p));
+  }
+  bool push(std::shared_ptr<const std::string>) override { return false; }
+};
+
+// ---- WebSocket ----------------------------------------------------------------------------
+
+class WsSession final : public rpc::Session, public std::enable_shared_from_this<WsSession> {
+ public:
+  WsSession(tcp::socket socket, std::string peer, std::shared_ptr<HttpState> st)
+      : rpc::Session("ws", std::move(peer), true), ws_(std::move(socket)),
+        read_timer_(ws_.get_executor()), login_timer_(ws_.get_executor()), st_(std::move(st)),
+        limits_(st_->ctx.limits), stats_(st_->ctx.stats), out_(limits_, stats_, 0),
+        write_deadline_(ws_.get_executor(), limits_.write_timeout) {
+    ++st_->websockets;
+  }
+  ~WsSession() override {
+    --st_->websockets;
+  }
+
+  void start(http::request<http::string_body> req) {
+    auto timeouts = websocket::stream_base::timeout::suggested(beast::role_type::server);
+    timeouts.handshake_timeout = limits_.read_timeout;
+    if (limits_.idle_timeout.count() > 0) timeouts.idle_timeout = limits_.idle_timeout;
+    timeouts.keep_alive_pings = true;
+    ws_.set_option(timeouts);
+    ws_.read_message_max(limits_.max_message_bytes);
+    ws_.set_option(websocket::stream_base::decorator(
+        [](websocket::response_type& res) { res.set(http::field::server, "goniod"); }));
+    auto self = shared_from_this();
+    st_->add_closer(self, [w = std::weak_ptr<WsSession>(self)] {
+      if (auto s = w.lock()) asio::post(s->ws_.get_executor(), [s] { s->close("the server is stopping"); });
+    });
+    {
+      std::lock_guard lock(st_->mu);
+      std::erase_if(st_->ws, [](const auto& w) { return w.expired(); });
+      st_->ws.push_back(self);
+    }
+    if (principal().role == Role::none) {
+      login_timer_.expires_after(limits_.login_timeout);
+      login_timer_.async_wait([self](const error_code& ec) {
+        if (ec || self->closed_ || self->principal().role != Role::none) return;
+        ++self->stats_.login_timeouts;
+        self->close(fmt::format("did not log in within {} s",
+                                std::chrono::duration<double>(self->limits_.login_timeout).count()));
+      });
+    }
+    ws_.async_accept(req, [self](const error_code& ec) {
+      if (ec) {
+        self->close(ec.message());
+        return;
+      }
+      self->ws_.text(true);
+      self->do_read();
+    });
+  }
+
+  bool push(std::shared_ptr<const std::string> message) override {
+    if (closed_flag_.load()) return false;
+    if (!out_.admit(*message)) {
+      asio::post(ws_.get_executor(), [self = shared_from_this()] {
+        self->slow_reader("its outgoing queue is full (the peer does not read)");
+      });
+      return false;
+    }
+    asio::post(ws_.get_executor(), [self = shared_from_this(), m = std::move(message)] {
+      self->enqueue(m, true);
+    });
+    return true;
+  }
+
+  void end(const std::string& why) {
+    asio::post(ws_.get_executor(), [self = shared_from_this(), why] { self->close(why); });
+  }
+
+ private:
+  void slow_reader(const std::string& why) {
+    if (closed_) return;
+    ++stats_.slow_readers;
+    close(why);
+  }
+
+  bool may_read() const {
+    return !closed_ && in_flight_ < limits_.max_in_flight && !out_.backed_up();
+  }
+
+  // Frames are read one at a time so that a message that has started must complete within
+  // read_timeout, as on NDJSON (Beast's own timeouts only cover idle peers).
+  void do_read() {
+    if (reading_ || !may_read()) return;
+    reading_ = true;
+    ws_.async_read_some(buffer_, limits_.max_message_bytes, [self = shared_from_this()](const error_code& ec, std::size_t) {
+      self->reading_ = false;
+      if (self->closed_) return;
+      if (ec) {
+        if (ec == websocket::error::message_too_big) {
+          ++self->st_->dropped;
+          spdlog::warn("ws {}: message larger than {} bytes; closing", self->peer(),
+                       self->limits_.max_message_bytes);
+        }
+        self->close(ec == websocket::error::closed ? "" : ec.message());
+        return;
+      }
+      if (!self->ws_.is_message_done()) {
+        if (!self->message_started_) {
+          self->message_started_ = true;
+          self->read_timer_.expires_after(self->limits_.read_timeout);
+          self->read_timer_.async_wait([self](const error_code& e) {
+            if (e || self->closed_ || !self->message_started_) return;
+            self->close("read timeout (message never completed)");
+          });
+        }
+        self->do_read();
+        return;
+      }
+      self->message_started_ = false;
+      self->read_timer_.cancel();
+      std::string text = beast::buffers_to_string(self->buffer_.data());
+      self->buffer_.consume(self->buffer_.size());
+      self->buffer_.shrink_to_fit();
+      auto weight = std::make_shared<std::size_t>(1);
+      const auto w = self->st_->ctx.dispatcher.handle(text, self, [self, weight](std::string r) {
+        asio::post(self->ws_.get_executor(), [self, weight, r = std::move(r)]() mutable {
+          self->in_flight_ -= std::min(self->in_flight_, *weight);
+          if (!r.empty()) self->enqueue(std::make_shared<const std::string>(std::move(r)), false);
+          self->do_read();
+        });
+      });
+      *weight = w;  // before the posted reply can run: both are on this strand
+      self->in_flight_ += w;
+      self->do_read();
+    });
+  }
+
+  void enqueue(OutputQueue::Message m, bool counted) {
+    if (closed_) {
+      if (counted) out_.forget(m);
+      return;
+    }
+    if (!out_.add(std::move(m), counted)) {
+      slow_reader("its outgoing queue is full (the peer does not read its answers)");
+      return;
+    }
+    do_write();
+  }
+
+  void do_write() {
+    if (writing_ || out_.empty() || closed_) return;
+    writing_ = true;
+    write_deadline_.started([self = shared_from_this()] { return !self->closed_ && self->writing_; },
+                            [self = shared_from_this()](const std::string& why) { self->slow_reader(why); });
+    ws_.async_write(asio::buffer(*out_[0]), [self = shared_from_this()](const error_code& ec, std::size_t) {
+      self->writing_ = false;
+      if (self->closed_) return;
+      self->out_.pop(1);
+      if (ec) {
+        self->close(ec.message());
+        return;
+      }
+      self->do_write();
+      self->do_read();
+    });
+  }
+
+  void close(const std::string& why) {
+    if (closed_) return;
+    closed_ = true;
+    closed_flag_ = true;
+    if (!why.empty()) spdlog::info("ws {}: closing: {}", peer(), why);
+    st_->ctx.hub.remove(id());
+    read_timer_.cancel();
+    write_deadline_.cancel();
+    login_timer_.cancel();
+    error_code ignored;
+    beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
+    beast::get_lowest_layer(ws_).close();
+    if (!writing_) out_.pop(out_.size());
+  }
+
+  websocket::stream<beast::tcp_stream> ws_;
+  asio::steady_timer read_timer_, login_timer_;
+  std::shared_ptr<HttpState> st_;
+  Limits limits_;
+  NetStats& stats_;
+  OutputQueue out_;
+  WriteDeadline write_deadline_;
+  beast::flat_buffer buffer_;
+  std::atomic<bool> closed_flag_{false};
+  bool reading_ = false, writing_ = false, closed_ = false, message_started_ = false;
+  std::size_t in_flight_ = 0;
+};
+
+// ---- HTTP ---------------------------------------------------------------------------------
+
+class HttpSession final : public std::enable_shared_from_this<HttpSession> {
+ public:
+  HttpSession(tcp::socket socket, std::shared_ptr<HttpState> st)
+      : stream_(std::move(socket)), st_(std::move(st)), limits_(st_->ctx.limits) {
+    error_code ec;
+    const auto ep = stream_.socket().remote_endpoint(ec);
+    peer_ = ec ? "?" : fmt::format("{}:{}", ep.address().to_string(), ep.port());
+  }
+  ~HttpSession() { --st_->connections; }
+
+  void start() {
+    auto self = shared_from_this();
+    st_->add_closer(self, [w = std::weak_ptr<HttpSession>(self)] {
+      if (auto s = w.lock())
+        asio::post(s->stream_.get_executor(), [s] {
+          error_code ignored;
+          s->stream_.socket().shutdown(tcp::socket::shutdown_both, ignored);
+          s->stream_.close();
+        });
+    });
+    do_read();
+  }
+
+ private:
+  void do_read() {
+    parser_.emplace();
+    parser_->body_limit(limits_.max_message_bytes);
+    parser_->header_limit(kHeaderLimit);
+    // One deadline for the whole request (a keep-alive connection waits at most this long
+    // for the next one).
+    stream_.expires_after(limits_.read_timeout);
+    http::async_read(stream_, buffer_, *parser_, [self = shared_from_this()](const error_code& ec, std::size_t) {
+      self->on_read(ec);
+    });
+  }
+
+  void on_read(const error_code& ec) {
+    if (ec == http::error::end_of_stream || ec == asio::error::eof) return close();
+    if (ec == http::error::body_limit || ec == http::error::header_limit) {
+      ++st_->dropped;
+      spdlog::warn("http {}: request larger than the limit; closing", peer_);
+      return send(http::status::payload_too_large,
+                  error_body(rpc::code::invalid_request,
+                             fmt::format("message exceeds the limit of {} bytes",
+                                         limits_.max_message_bytes),
+                             Errc::out_of_range),
+                  false, 11);
+    }
+    if (ec) {
+      if (ec == beast::error::timeout) ++st_->dropped;
+      return close();
+    }
+    auto req = parser_->release();
+    const auto target = std::string(req.target());
+    const auto origin = std::string(req[http::field::origin]);
+    const auto host = std::string(req[http::field::host]);
+    // A browser names the page's origin: only the listener's own host and the configured
+    // origins may use the API from a page (a foreign page could otherwise drive the
+    // instrument through a browser on the lab PC).
+    if (req.find(http::field::origin) != req.end() && !origin_allowed(origin, host, limits_)) {
+      ++st_->ctx.stats.refused_origin;
+      spdlog::warn("http {}: refused a request from origin '{}'", peer_, origin);
+      return send(http::status::forbidden,
+                  error_body(rpc::code::forbidden,
+                             fmt::format("origin '{}' may not use this API (allowed: this host and "
+                                         "server.allowed_origins)",
+                                         origin),
+                             Errc::forbidden, "Origin"),
+                  false, req.version());
+    }
+    cors_origin_ = req.find(http::field::origin) != req.end() && listed_origin(origin, limits_) ? origin : "";
+    if (req.method() == http::verb::options && target == "/rpc" && !cors_origin_.empty())
+      return send(http::status::no_content, {}, req.keep_alive(), req.version(), false, "POST, OPTIONS");
+    const auto token = bearer(req[http::field::authorization]);
+    std::optional<Principal> who;
+    if (!token.empty()) {
+      who = st_->ctx.auth.authenticate(token, websocket::is_upgrade(req) ? "ws" : "http");
+      if (!who)
+        return send(http::status::unauthorized,
+                    error_body(rpc::code::unauthorized, "unknown bearer token", Errc::unauthorized),
+                    req.keep_alive(), req.version(), true);
+    }
+    if (websocket::is_upgrade(req)) {
+      if (target != "/ws")
+        return send(http::status::not_found,
+                    error_body(rpc::code::method_not_found, "WebSocket endpoint is /ws", Errc::not_found),
+                    false, req.version());
+      stream_.expires_never();
+      auto ws = std::make_shared<WsSession>(stream_.release_socket(), peer_, st_);
+      if (who) ws->set_principal(*who);
+      ws->start(std::move(req));
+      return;
+    }
+    if (target != "/rpc" && st_->ctx.web && (req.method() == http::verb::get))
+      if (const auto* file = st_->ctx.web->find(target)) return send_file(*file, host, req.keep_alive(), req.version());
+    if (target != "/rpc")
+      return send(http::status::not_found,
+                  error_body(rpc::code::method_not_found,
+                             fmt::format("no resource {} (POST /rpc, GET /ws)", target),
+                             Errc::not_found),
+                  req.keep_alive(), req.version());
+    if (req.method() != http::verb::post)
+      return send(http::status::method_not_allowed,
+                  error_body(rpc::code::invalid_request, "use POST for /rpc", Errc::invalid_argument),
+                  req.keep_alive(), req.version(), false, "POST");
+    // A form or a no-cors fetch cannot send application/json across origins without a
+    // preflight: requiring it keeps cross-origin simple requests out.
+    if (!is_json_media_type(std::string(req[http::field::content_type]))) {
+      ++st_->ctx.stats.refused_content_type;
+      return send(http::status::unsupported_media_type,
+                  error_body(rpc::code::invalid_request,
+                             fmt::format("Content-Type '{}' is not application/json",
+                                         std::string(req[http::field::content_type])),
+                             Errc::invalid_argument, "Content-Type"),
+                  false, req.version());
+    }
+    Principal p;
+    p.transport = "http";
+    p.name = "anonymous";
+    if (who) p = *who;
+    auto session = std::make_shared<OneShot>(peer_, p);
+    const bool keep = req.keep_alive();
+    const unsigned version = req.version();
+    st_->ctx.dispatcher.handle(req.body(), session, [self = shared_from_this(), keep, version](std::string r) {
+      asio::post(self->stream_.get_executor(), [self, keep, version, r = std::move(r)]() mutable {
+        if (r.empty()) return self->send(http::status::no_content, {}, keep, version);
+        // The answer is held until written: it counts against the shared output budget.
+        auto& buffered = self->st_->ctx.stats.buffered_bytes;
+        if (buffered.load() + r.size() > self->limits_.max_buffered_bytes && r.size() > kReadPauseBytes)
+          return self->send(http::status::service_unavailable,
+                            error_body(rpc::code::overloaded,
+                                       fmt::format("goniod's output buffers are full (limit "
+                                                   "server.max_buffered_bytes = {}); retry later",
+                                                   self->limits_.max_buffered_bytes),
+                                       Errc::busy),
+                            false, version);
+        self->send(http::status::ok, std::move(r), keep, version);
+      });
+    });
+  }
+
+  // One of the dashboard's files; the body is copied into the response, and counts against
+  // the shared output budget like any answer.
+  void send_file(const WebFile& file, std::string_view host, bool keep_alive, unsigned version) {
+    auto res = std::make_shared<http::response<http::string_body>>(http::status::ok, version);
+    res->set(http::field::server, "goniod");
+    res->set(http::field::content_type, file.content_type);
+    res->set(http::field::cache_control, file.cache_control);
+    res->set("Content-Security-Policy", content_security_policy(host));
+    res->set("X-Content-Type-Options", "nosniff");
+    res->set("Referrer-Policy", "no-referrer");
+    res->set("X-Frame-Options", "DENY");
+    res->keep_alive(keep_alive);
+    res->body() = file.body;
+    res->prepare_payload();
+    write(std::move(res));
+  }
+
+  void send(http::status status, std::string body, bool keep_alive, unsigned version,
+            bool challenge = false, const char* allow = nullptr) {
+    auto res = std::make_shared<http::response<http::string_body>>(status, version);
+    res->set(http::field::server, "goniod");
+    if (!body.empty()) res->set(http::field::content_type, "application/json");
+    if (challenge) res->set(http::field::www_authenticate, "Bearer realm=\"goniod\"");
+    if (allow) res->set(http::field::allow, allow);
+    if (!cors_origin_.empty()) {
+      res->set(http::field::access_control_allow_origin, cors_origin_);
+      res->set(http::field::vary, "Origin");
+      if (status == http::status::no_content && allow) {  // a preflight
+        res->set(http::field::access_control_allow_methods, "POST");
+        res->set(http::field::access_control_allow_headers, "Authorization, Content-Type");
+        res->set(http::field::access_control_max_age, "600");
+      }
+    }
+    res->keep_alive(keep_alive);
+    res->body() = std::move(body);
+    res->prepare_payload();
+    write(std::move(res));
+  }
+
+  void write(std::shared_ptr<http::response<http::string_body>> res) {
+    const auto bytes = res->body().size();
+    st_->ctx.stats.buffered_bytes += bytes;
+    stream_.expires_after(limits_.write_timeout);
+    http::async_write(stream_, *res, [self = shared_from_this(), res, bytes](const error_code& ec, std::size_t) {
+      self->st_->ctx.stats.buffered_bytes -= bytes;
+      if (ec == beast::error::timeout) ++self->st_->ctx.stats.slow_readers;
+      if (ec || !res->keep_alive()) return self->close();
+      self->do_read();
+    });
+  }
+
+  void close() {
+    error_code ignored;
+    stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
+    stream_.close();
+  }
+
+  beast::tcp_stream stream_;
+  std::shared_ptr<HttpState> st_;
+  Limits limits_;
+  beast::flat_buffer buffer_;
+  std::optional<http::request_parser<http::string_body>> parser_;
+  std::string peer_;
+  std::string cors_origin_;  // a listed Origin of the current request: CORS headers
+};
+
+class HttpListener final : public Listener, public std::enable_shared_from_this<HttpListener> {
+ public:
+  HttpListener(asio::io_context& io, tcp::acceptor acceptor, std::string endpoint,
+               std::shared_ptr<HttpState> st)
+      : io_(io), acceptor_(std::move(acceptor)), backoff_(acceptor_.get_executor()),
+        endpoint_(std::move(endpoint)), st_(std::move(st)) {}
+
+  void accept() {
+    acceptor_.async_accept(asio::make_strand(io_), [self = shared_from_this()](const error_code& ec, tcp::socket s) {
+      if (ec) {
+        if (ec == asio::error::operation_aborted || !self->acceptor_.is_open()) return;
+        self->backoff_.failed(ec, self->endpoint_, self->st_->ctx.stats.accept_backoffs,
+                              [self] { self->accept(); });
+        return;
+      }
+      self->backoff_.succeeded();
+      ++self->st_->accepted;
+      if (self->st_->connections.load() + self->st_->websockets.load() >=
+          self->st_->ctx.limits.max_connections) {
+        ++self->st_->dropped;
+        error_code ignored;
+        s.close(ignored);
+      } else {
+        ++self->st_->connections;
+        error_code ignored;
+        s.set_option(tcp::no_delay(true), ignored);  // a response is one write; see ndjson.cpp
+        std::make_shared<HttpSession>(std::move(s), self->st_)->start();
+      }
+      self->accept();
+    });
+  }
+
+  std::string endpoint() const override { return endpoint_; }
+
+  void close() override {
+    asio::post(acceptor_.get_executor(), [self = shared_from_this()] {
+      error_code ignored;
+      self->acceptor_.close(ignored);
+      self->backoff_.cancel();
+    });
+    std::vector<std::pair<std::weak_ptr<void>, std::function<void()>>> closers;
+    {
+      std::lock_guard lock(st_->mu);
+      closers.swap(st_->closers);
+    }
+    for (auto& c : closers) c.second();
+  }
+
+  void end_sessions_of(const std::string& name) override {
+    std::vector<std::shared_ptr<WsSession>> live;
+    {
+      std::lock_guard lock(st_->mu);
+      for (auto& w : st_->ws)
+        if (auto s = w.lock()) live.push_back(std::move(s));
+    }
+    for (auto& s : live) {
+      const auto p = s->principal();
+      if (p.role == Role::none || p.name != name) continue;
+      ++st_->ctx.stats.revoked_sessions;
+      s->end(fmt::format("the token '{}' was revoked", name));
+    }
+  }
+
+  json stats() const override {
+    return json{{"endpoint", endpoint_},
+                {"connections", st_->connections.load()},
+                {"websockets", st_->websockets.load()},
+                {"accepted", st_->accepted.load()},
+                {"dropped", st_->dropped.load()}};
+  }
+
+ private:
+  asio::io_context& io_;
+  tcp::acceptor acceptor_;
+  AcceptBackoff backoff_;
+  std::string endpoint_;
+  std::shared_ptr<HttpState> st_;
+};
+
+}  // namespace
+
+std::shared_ptr<Listener> listen_http(asio::io_context& io, const std::string& host,
+                                      std::uint16_t port, const Context& ctx) {
+  auto [acceptor, name] = bind_tcp(io, "http", host, port);
+  auto l = std::make_shared<HttpListener>(io, std::move(acceptor), std::move(name),
+                                          std::make_shared<HttpState>(ctx));
+  l->accept();
+  return l;
+}
+
+}  // namespace gonio::daemon::net

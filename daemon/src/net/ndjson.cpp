@@ -1,0 +1,531 @@
+// NDJSON transports over a Unix socket and TCP (Boost.Asio), see net.hpp.
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <atomic>
+#include <filesystem>
+#include <mutex>
+
+#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange without it
+
+#include <boost/asio/buffer.hpp>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/local/stream_protocol.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <boost/asio/strand.hpp>
+#include <boost/asio/write.hpp>
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "gonio/daemon/net/net.hpp"
+#include "net/accept.hpp"
+#include "net/session.hpp"
+
+namespace gonio::daemon::net {
+
+namespace asio = boost::asio;
+using boost::system::error_code;
+using Clock = std::chrono::steady_clock;
+using nlohmann::json;
+
+namespace {
+
+// What the sessions of one listener share with it.
+struct ListenerState {
+  Context ctx;
+  std::string kind;  // "unix", "tcp"
+  std::atomic<std::size_t> connections{0}, accepted{0}, dropped{0};
+  std::mutex mu;
+  std::vector<std::weak_ptr<rpc::Session>> sessions;
+  explicit ListenerState(const Context& c, std::string k) : ctx(c), kind(std::move(k)) {}
+};
+
+template <class Protocol>
+class NdjsonSession final : public rpc::Session,
+                            public std::enable_shared_from_this<NdjsonSession<Protocol>> {
+ public:
+  using Socket = typename Protocol::socket;
+
+  NdjsonSession(Socket socket, std::string peer, std::shared_ptr<ListenerState> ls)
+      : rpc::Session(ls->kind, std::move(peer), true), socket_(std::move(socket)),
+        timer_(socket_.get_executor()), login_timer_(socket_.get_executor()), ls_(std::move(ls)),
+        limits_(ls_->ctx.limits), stats_(ls_->ctx.stats), out_(limits_, stats_, 1),
+        write_deadline_(socket_.get_executor(), limits_.write_timeout) {}
+
+  ~NdjsonSession() override {
+    --ls_->connections;
+    stats_.buffered_bytes -= input_accounted_;
+  }
+
+  void start() {
+    last_activity_ = Clock::now();
+    if (principal().role == Role::none) {
+      // A peer without a role can only log in: it gets login_timeout to do so.
+      login_timer_.expires_after(limits_.login_timeout);
+      login_timer_.async_wait([self = this->shared_from_this()](const error_code& ec) {
+        if (ec || self->closed_ || self->principal().role != Role::none) return;
+        ++self->stats_.login_timeouts;
+        self->close(fmt::format("did not log in within {} s",
+                                std::chrono::duration<double>(self->limits_.login_timeout).count()));
+      });
+    }
+    arm_timer();
+    do_read();
+  }
+
+  bool push(std::shared_ptr<const std::string> message) override {
+    if (closing_.load()) return false;
+    if (!out_.admit(*message)) {
+      asio::post(socket_.get_executor(), [self = this->shared_from_this()] {
+        self->slow_reader("its outgoing queue is full (the peer does not read)");
+      });
+      return false;
+    }
+    asio::post(socket_.get_executor(), [self = this->shared_from_this(), m = std::move(message)] {
+      self->enqueue(m);
+    });
+    return true;
+  }
+
+  void shutdown() {
+    asio::post(socket_.get_executor(), [self = this->shared_from_this()] { self->close("the server is stopping"); });
+  }
+
+  void end(const std::string& why) {
+    asio::post(socket_.get_executor(), [self = this->shared_from_this(), why] { self->close(why); });
+  }
+
+ private:
+  // Keeps the shared budget's count of this connection's unparsed input up to date.
+  void account_input() {
+    const auto now = buffer_.size();
+    if (now >= input_accounted_) stats_.buffered_bytes += now - input_accounted_;
+    else stats_.buffered_bytes -= input_accounted_ - now;
+    input_accounted_ = now;
+  }
+
+  bool may_read() const {
+    return !closed_ && !close_after_write_ && in_flight_ < limits_.max_in_flight && !out_.backed_up();
+  }
+
+  void do_read() {
+    if (reading_ || !may_read()) return;
+    // Complete lines left over from a pause are handled before anything new is read.
+    if (buffer_.find('\n') != std::string::npos) {
+      handle_lines();
+      if (!may_read() || reading_) return;
+    }
+    arm_timer();
+    reading_ = true;
+    socket_.async_read_some(asio::buffer(chunk_), [self = this->shared_from_this()](
+                                                      const error_code& ec, std::size_t n) {
+      self->reading_ = false;
+      self->on_read(ec, n);
+    });
+  }
+
+  void on_read(const error_code& ec, std::size_t n) {
+    if (closed_) return;
+    if (ec) {
+      close(ec == asio::error::eof ? "" : ec.message());
+      return;
+    }
+    last_activity_ = Clock::now();
+    if (buffer_.empty() && n > 0) partial_since_ = last_activity_;
+    buffer_.append(chunk_.data(), n);
+    account_input();
+    handle_lines();
+    if (closed_) return;
+    // Unfinished lines count against the same budget as answers: many peers each sending
+    // most of a maximal line cannot together take more than it.
+    if (buffer_.size() > kReadPauseBytes && stats_.buffered_bytes.load() > limits_.max_buffered_bytes) {
+      ++stats_.overload_dropped;
+      close("goniod's buffers are full (server.max_buffered_bytes) and this peer sends a large message");
+      return;
+    }
+    if (buffer_.size() > limits_.max_message_bytes && buffer_.find('\n') == std::string::npos) {
+      too_large();
+      return;
+    }
+    arm_timer();
+    do_read();
+  }
+
+  // Dispatches the complete lines in the buffer while the connection may take more work;
+  // the rest stays buffered until replies have gone out.
+  void handle_lines() {
+    std::size_t start = 0;
+    while (may_read()) {
+      const auto nl = buffer_.find('\n', start);
+      if (nl == std::string::npos) break;
+      std::string_view line(buffer_.data() + start, nl - start);
+      if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+      start = nl + 1;
+      if (line.size() > limits_.max_message_bytes) {
+        too_large();
+        return;
+      }
+      if (line.find_first_not_of(" \t") != std::string_view::npos) {
+        dispatch(line);
+        if (closed_) return;
+      }
+    }
+    if (start == 0) return;
+    buffer_.erase(0, start);
+    if (buffer_.empty() && buffer_.capacity() > kReadPauseBytes) buffer_.shrink_to_fit();  // a 1 MB line does not stay allocated
+    else partial_since_ = Clock::now();
+    account_input();
+  }
+
+  void too_large() {
+    spdlog::warn("{} {}: message larger than {} bytes; closing", transport(), peer(),
+                 limits_.max_message_bytes);
+    buffer_.clear();
+    buffer_.shrink_to_fit();
+    account_input();
+    enqueue(std::make_shared<const std::string>(
+                json{{"jsonrpc", "2.0"},
+                     {"error", rpc::error_object(rpc::code::invalid_request,
+                                                 fmt::format("message exceeds the limit of {} bytes",
+                                                             limits_.max_message_bytes),
+                                                 Errc::out_of_range)},
+                     {"id", nullptr}}
+                    .dump()),
+            false);
+    close_after_write_ = true;
+    if (!writing_) close("");
+  }
+
+  // A reply that comes back before handle() returns (every non-blocking method) is queued
+  // right here on the strand; one from a worker thread is posted to it. Saves a trip through
+  // the scheduler per request.
+  void dispatch(std::string_view line) {
+    struct Handoff {
+      std::atomic<int> state{0};  // 0: in handle(), 1: replied inside it, 2: handle() returned
+      std::string text;
+      std::size_t weight = 1;
+    };
+    auto h = std::make_shared<Handoff>();
+    const auto weight = ls_->ctx.dispatcher.handle(
+        line, this->shared_from_this(), [self = this->shared_from_this(), h](std::string response) {
+          h->text = std::move(response);
+          int inside = 0;
+          if (h->state.compare_exchange_strong(inside, 1)) return;
+          asio::post(self->socket_.get_executor(), [self, h] {
+            self->on_reply(std::move(h->text), h->weight);
+            self->do_read();
+          });
+        });
+    // Batch elements count one each: a batch takes as much of max_in_flight as its size.
+    h->weight = weight;
+    in_flight_ += weight;
+    int inside = 0;
+    // on_read() resumes reading after its last line.
+    if (!h->state.compare_exchange_strong(inside, 2)) on_reply(std::move(h->text), weight);
+  }
+
+  void on_reply(std::string r, std::size_t weight) {
+    in_flight_ -= std::min(in_flight_, weight);
+    if (!r.empty()) enqueue(std::make_shared<const std::string>(std::move(r)), false);
+  }
+
+  // On the strand. `counted` says whether push() already counted the message.
+  void enqueue(OutputQueue::Message m, bool counted = true) {
+    if (closed_) {
+      if (counted) out_.forget(m);
+      return;
+    }
+    if (!out_.add(std::move(m), counted)) {
+      slow_reader("its outgoing queue is full (the peer does not read its answers)");
+      return;
+    }
+    do_write();
+  }
+
+  void slow_reader(const std::string& why) {
+    if (closed_) return;
+    ++stats_.slow_readers;
+    close(why);
+  }
+
+  // Everything queued goes out in one gathered write (replies and notifications that piled
+  // up while the previous write was in flight), with a deadline.
+  void do_write() {
+    if (writing_ || out_.empty() || closed_) return;
+    writing_ = true;
+    static constexpr std::size_t kMaxGather = 32;  // 64 buffers: one writev
+    writing_count_ = std::min(out_.size(), kMaxGather);
+    const auto done = [self = this->shared_from_this()](const error_code& ec, std::size_t) {
+      self->on_written(ec);
+    };
+    write_deadline_.started([self = this->shared_from_this()] { return !self->closed_ && self->writing_; },
+                            [self = this->shared_from_this()](const std::string& why) { self->slow_reader(why); });
+    if (writing_count_ == 1) {
+      const std::array<asio::const_buffer, 2> bufs{asio::buffer(*out_[0]), asio::buffer("\n", 1)};
+      asio::async_write(socket_, bufs, done);
+      return;
+    }
+    std::vector<asio::const_buffer> bufs;
+    bufs.reserve(2 * writing_count_);
+    for (std::size_t i = 0; i < writing_count_; ++i) {
+      bufs.push_back(asio::buffer(*out_[i]));
+      bufs.push_back(asio::buffer("\n", 1));
+    }
+    asio::async_write(socket_, bufs, done);
+  }
+
+  void on_written(const error_code& ec) {
+    writing_ = false;
+    if (closed_) return;
+    out_.pop(writing_count_);
+    if (ec) {
+      close(ec.message());
+      return;
+    }
+    if (out_.empty() && close_after_write_) {
+      close("");
+      return;
+    }
+    do_write();
+    do_read();  // reading may have paused on the queue
+  }
+
+  // One timer: a started message must complete within read_timeout; an idle connection
+  // lives idle_timeout (0: forever).
+  void arm_timer() {
+    if (closed_) return;
+    std::optional<Clock::time_point> deadline;
+    if (!buffer_.empty()) deadline = partial_since_ + limits_.read_timeout;
+    else if (limits_.idle_timeout.count() > 0) deadline = last_activity_ + limits_.idle_timeout;
+    if (!deadline) {
+      timer_.cancel();
+      return;
+    }
+    deadline_ = *deadline;
+    timer_.expires_at(*deadline);
+    timer_.async_wait([self = this->shared_from_this()](const error_code& ec) {
+      if (ec || self->closed_) return;
+      if (Clock::now() < self->deadline_) return;  // re-armed meanwhile
+      // Complete lines waiting for replies to drain are not a stalled peer (the write
+      // deadline covers one that does not read).
+      if (!self->buffer_.empty() && self->buffer_.find('\n') != std::string::npos) return;
+      self->close(self->buffer_.empty() ? "idle timeout" : "read timeout (message never completed)");
+    });
+  }
+
+  void close(const std::string& why) {
+    if (closed_) return;
+    closed_ = true;
+    closing_ = true;
+    if (!why.empty()) {
+      ++ls_->dropped;
+      spdlog::info("{} {}: closing: {}", transport(), peer(), why);
+    }
+    error_code ignored;
+    timer_.cancel();
+    write_deadline_.cancel();
+    login_timer_.cancel();
+    socket_.shutdown(Socket::shutdown_both, ignored);
+    socket_.close(ignored);
+    ls_->ctx.hub.remove(id());
+    // What is queued is freed now, not when the last handler lets go of the session.
+    if (!writing_) out_.pop(out_.size());
+    buffer_.clear();
+    buffer_.shrink_to_fit();
+    account_input();
+  }
+
+  Socket socket_;
+  asio::steady_timer timer_, login_timer_;
+  std::shared_ptr<ListenerState> ls_;
+  Limits limits_;
+  NetStats& stats_;
+  OutputQueue out_;
+  WriteDeadline write_deadline_;
+  std::array<char, 16384> chunk_{};
+  std::string buffer_;
+  std::size_t writing_count_ = 0;  // messages at the front of out_ being written
+  std::atomic<bool> closing_{false};
+  bool reading_ = false, writing_ = false, closed_ = false, close_after_write_ = false;
+  std::size_t in_flight_ = 0;
+  std::size_t input_accounted_ = 0;  // bytes of buffer_ counted in stats_.buffered_bytes
+  Clock::time_point partial_since_, last_activity_, deadline_;
+};
+
+template <class Protocol>
+class NdjsonListener final : public Listener,
+                             public std::enable_shared_from_this<NdjsonListener<Protocol>> {
+ public:
+  using Acceptor = typename Protocol::acceptor;
+
+  NdjsonListener(asio::io_context& io, Acceptor acceptor, std::string endpoint,
+                 std::shared_ptr<ListenerState> ls)
+      : io_(io), acceptor_(std::move(acceptor)), backoff_(acceptor_.get_executor()),
+        endpoint_(std::move(endpoint)), ls_(std::move(ls)) {}
+
+  void accept() {
+    acceptor_.async_accept(asio::make_strand(io_), [self = this->shared_from_this()](
+                                                       const error_code& ec,
+                                                       typename Protocol::socket socket) {
+      if (ec) {
+        if (ec == asio::error::operation_aborted || !self->acceptor_.is_open()) return;
+        self->backoff_.failed(ec, self->endpoint_, self->ls_->ctx.stats.accept_backoffs,
+                              [self] { self->accept(); });
+        return;
+      }
+      self->backoff_.succeeded();
+      self->on_accept(std::move(socket));
+      self->accept();
+    });
+  }
+
+  void end_sessions_of(const std::string& name) override {
+    std::vector<std::shared_ptr<rpc::Session>> live;
+    {
+      std::lock_guard lock(ls_->mu);
+      for (auto& w : ls_->sessions)
+        if (auto s = w.lock()) live.push_back(std::move(s));
+    }
+    for (auto& s : live) {
+      const auto p = s->principal();
+      if (p.role == Role::none || p.name != name) continue;
+      ++ls_->ctx.stats.revoked_sessions;
+      std::static_pointer_cast<NdjsonSession<Protocol>>(s)->end(
+          fmt::format("the token '{}' was revoked", name));
+    }
+  }
+
+  std::string endpoint() const override { return endpoint_; }
+
+  void close() override {
+    asio::post(acceptor_.get_executor(), [self = this->shared_from_this()] {
+      error_code ignored;
+      self->acceptor_.close(ignored);
+      self->backoff_.cancel();
+    });
+    std::vector<std::weak_ptr<rpc::Session>> sessions;
+    {
+      std::lock_guard lock(ls_->mu);
+      sessions.swap(ls_->sessions);
+    }
+    for (auto& w : sessions)
+      if (auto s = w.lock()) std::static_pointer_cast<NdjsonSession<Protocol>>(s)->shutdown();
+  }
+
+  json stats() const override {
+    return json{{"endpoint", endpoint_},
+                {"connections", ls_->connections.load()},
+                {"accepted", ls_->accepted.load()},
+                {"dropped", ls_->dropped.load()}};
+  }
+
+ private:
+  void on_accept(typename Protocol::socket socket) {
+    ++ls_->accepted;
+    if (ls_->connections.load() >= ls_->ctx.limits.max_connections) {
+      ++ls_->dropped;
+      const auto msg = std::make_shared<std::string>(
+          json{{"jsonrpc", "2.0"},
+               {"error", rpc::error_object(rpc::code::overloaded,
+                                           fmt::format("too many connections (limit {})",
+                                                       ls_->ctx.limits.max_connections),
+                                           Errc::busy)},
+               {"id", nullptr}}
+              .dump() +
+          "\n");
+      auto sock = std::make_shared<typename Protocol::socket>(std::move(socket));
+      asio::async_write(*sock, asio::buffer(*msg), [sock, msg](const error_code&, std::size_t) {
+        error_code ignored;
+        sock->close(ignored);
+      });
+      return;
+    }
+    ++ls_->connections;
+    std::string peer;
+    Principal principal;
+    principal.transport = ls_->kind;
+    if constexpr (std::is_same_v<Protocol, asio::local::stream_protocol>) {
+      ucred cred{};
+      socklen_t len = sizeof cred;
+      const bool known = getsockopt(socket.native_handle(), SOL_SOCKET, SO_PEERCRED, &cred, &len) == 0;
+      if (known) peer = fmt::format("uid={} pid={}", cred.uid, cred.pid);
+      // The socket's file mode lets the peer in; its uid and groups give it a role
+      // ([auth.unix]): a lab member in the socket's group is a technician, not an admin.
+      std::vector<gid_t> groups(64);
+      socklen_t glen = static_cast<socklen_t>(groups.size() * sizeof(gid_t));
+      if (getsockopt(socket.native_handle(), SOL_SOCKET, SO_PEERGROUPS, groups.data(), &glen) != 0 && errno == ERANGE) {
+        groups.resize(glen / sizeof(gid_t) + 1);
+        glen = static_cast<socklen_t>(groups.size() * sizeof(gid_t));
+        if (getsockopt(socket.native_handle(), SOL_SOCKET, SO_PEERGROUPS, groups.data(), &glen) != 0) glen = 0;
+      }
+      groups.resize(glen / sizeof(gid_t));
+      if (known) groups.push_back(cred.gid);
+      principal.name = fmt::format("unix:uid={}", cred.uid);
+      principal.role = known ? unix_role(ls_->ctx.limits, cred.uid, groups) : Role::none;
+    } else {
+      error_code ec;
+      // Every reply is one write: Nagle would only hold back the tail of a large one.
+      socket.set_option(asio::ip::tcp::no_delay(true), ec);
+      const auto ep = socket.remote_endpoint(ec);
+      peer = ec ? "?" : fmt::format("{}:{}", ep.address().to_string(), ep.port());
+      principal.name = "anonymous";
+      principal.role = Role::none;
+    }
+    auto session = std::make_shared<NdjsonSession<Protocol>>(std::move(socket), peer, ls_);
+    session->set_principal(principal);
+    {
+      std::lock_guard lock(ls_->mu);
+      std::erase_if(ls_->sessions, [](const auto& w) { return w.expired(); });
+      ls_->sessions.push_back(session);
+    }
+    session->start();
+  }
+
+  asio::io_context& io_;
+  Acceptor acceptor_;
+  AcceptBackoff backoff_;
+  std::string endpoint_;
+  std::shared_ptr<ListenerState> ls_;
+};
+
+}  // namespace
+
+std::shared_ptr<Listener> listen_unix(asio::io_context& io, const std::string& path,
+                                      const Context& ctx) {
+  using P = asio::local::stream_protocol;
+  namespace fs = std::filesystem;
+  std::error_code fec;
+  if (fs::is_socket(fs::symlink_status(path, fec))) fs::remove(path, fec);  // stale, from a crash
+  P::acceptor acceptor(io);
+  error_code ec;
+  acceptor.open(P(), ec);
+  // Created 0660 from the start (no window in which others could connect).
+  const mode_t old = ::umask(0117);
+  if (!ec) acceptor.bind(P::endpoint(path), ec);
+  ::umask(old);
+  if (!ec) acceptor.listen(asio::socket_base::max_listen_connections, ec);
+  if (ec) throw Error(Errc::io_error, fmt::format("cannot listen on unix:{}: {}", path, ec.message()));
+  ::chmod(path.c_str(), 0660);
+  auto ls = std::make_shared<ListenerState>(ctx, "unix");
+  auto l = std::make_shared<NdjsonListener<P>>(io, std::move(acceptor), "unix:" + path, ls);
+  l->accept();
+  return l;
+}
+
+std::shared_ptr<Listener> listen_tcp(asio::io_context& io, const std::string& host,
+                                     std::uint16_t port, const Context& ctx) {
+  auto [acceptor, name] = bind_tcp(io, "tcp", host, port);
+  auto ls = std::make_shared<ListenerState>(ctx, "tcp");
+  auto l = std::make_shared<NdjsonListener<asio::ip::tcp>>(io, std::move(acceptor), name, ls);
+  l->accept();
+  return l;
+}
+
+}  // namespace gonio::daemon::net
