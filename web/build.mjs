@@ -6,7 +6,7 @@ import { build } from 'esbuild';
 import { mkdir, readFile, rm, writeFile } from 'node:fs/promises';
 import { join, basename, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { parseCgats } from './src/colour.js';
+import { parseCgats } from './src/color.js';
 
 const here = dirname(fileURLToPath(import.meta.url));
 const arg = (name, fallback) => {
@@ -17,11 +17,11 @@ const outdir = arg('--outdir', join(here, 'dist'));
 const colord = arg('--colord', '/usr/share/colord');
 const minify = !process.argv.includes('--no-minify');
 
-const colourTables = {
-  name: 'colour-tables',
+const colorTables = {
+  name: 'color-tables',
   setup(b) {
-    b.onResolve({ filter: /^virtual:colour-tables$/ }, () => ({ path: 'colour-tables', namespace: 'colour' }));
-    b.onLoad({ filter: /.*/, namespace: 'colour' }, async () => {
+    b.onResolve({ filter: /^virtual:color-tables$/ }, () => ({ path: 'color-tables', namespace: 'color' }));
+    b.onLoad({ filter: /.*/, namespace: 'color' }, async () => {
       const cmf = parseCgats(await readFile(join(colord, 'cmf', 'CIE1964-10deg-XYZ.cmf'), 'utf8'));
       const illuminant = parseCgats(await readFile(join(colord, 'illuminant', 'CIE-D65.sp'), 'utf8'));
       return { contents: `export default ${JSON.stringify({ cmf, illuminant })};`, loader: 'js' };
@@ -44,7 +44,7 @@ const result = await build({
   metafile: true,
   legalComments: 'linked',
   logLevel: 'warning',
-  plugins: [colourTables],
+  plugins: [colorTables],
 });
 const outputs = Object.keys(result.metafile.outputs).map((p) => basename(p));
 const js = outputs.find((f) => f.endsWith('.js'));

@@ -69,14 +69,14 @@ void from_json(const nlohmann::json& j, SampleSensitivity& s) {
   r.finish();
 }
 
-void to_json(nlohmann::json& j, const ColourCheck& c) {
+void to_json(nlohmann::json& j, const ColorCheck& c) {
   j = nlohmann::json{{"kind", c.kind},   {"difference", c.difference}, {"u", c.u},
                      {"limit", c.limit}, {"decision", c.decision}};
   if (c.luminance_ratio) j["luminance_ratio"] = *c.luminance_ratio;
   if (c.luminance_u) j["luminance_u"] = *c.luminance_u;
 }
 
-void from_json(const nlohmann::json& j, ColourCheck& c) {
+void from_json(const nlohmann::json& j, ColorCheck& c) {
   json_util::ObjectReader r(j, "colour");
   c.kind = r.required<std::string>("kind");
   c.difference = r.required<double>("difference");
@@ -111,7 +111,7 @@ void to_json(nlohmann::json& j, const PointRecord& p) {
   if (!p.u_model.empty()) j["u_model"] = p.u_model;
   if (!p.budget.empty()) j["budget"] = p.budget;
   if (!p.sample_sensitivity.empty()) j["sample_sensitivity"] = p.sample_sensitivity;
-  if (p.colour) j["colour"] = *p.colour;
+  if (p.color) j["colour"] = *p.color;
   if (p.integration_ms) j["integration_ms"] = *p.integration_ms;
 }
 
@@ -152,8 +152,8 @@ void from_json(const nlohmann::json& j, PointRecord& p) {
   p.u_model = r.optional<std::vector<double>>("u_model", {});
   p.budget = r.optional<std::vector<BudgetEntry>>("budget", {});
   p.sample_sensitivity = r.optional<std::vector<SampleSensitivity>>("sample_sensitivity", {});
-  p.colour.reset();
-  if (const auto* c = r.raw("colour"); c && !c->is_null()) p.colour = c->get<ColourCheck>();
+  p.color.reset();
+  if (const auto* c = r.raw("colour"); c && !c->is_null()) p.color = c->get<ColorCheck>();
   p.integration_ms.reset();
   if (const auto* t = r.raw("integration_ms"); t && !t->is_null()) {
     p.integration_ms = json_util::get_as<double>(*t, "integration_ms");

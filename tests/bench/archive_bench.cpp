@@ -14,7 +14,7 @@
 #include <chrono>
 #include <memory>
 
-#include "../integration/archive/servers.hpp"
+#include "gonio/test/archive_servers.hpp"
 #include "gonio/daemon/fleet/archive.hpp"
 #include "gonio/daemon/fleet/mqtt.hpp"
 #include "gonio/daemon/store/store.hpp"

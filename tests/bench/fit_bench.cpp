@@ -13,7 +13,7 @@
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
 
-#include "../unit/twin/fit/ideal_instrument.hpp"
+#include "gonio/test/ideal_instrument.hpp"
 #include "gonio/twin/fit.hpp"
 
 namespace {

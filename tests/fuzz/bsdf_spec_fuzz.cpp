@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "../../twin/src/bsdf/spec.hpp"
+#include "gonio/twin/detail/bsdf/spec.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/bsdf.hpp"
 

@@ -4,7 +4,7 @@
 import { useEffect, useState } from 'preact/hooks';
 import { html, PlotHost } from './ui.js';
 import { POINTS_PAGE, MAX_COMPARE, channelOf, compareColumns, diffStats, fmt, incidences, shortTime } from './logic.js';
-import { overlayPlot, SERIES_COLOURS } from './plot.js';
+import { overlayPlot, SERIES_COLORS } from './plot.js';
 
 async function allPoints(call, scan) {
   const out = [];
@@ -53,7 +53,7 @@ export function ComparePanel({ ids, params, samples, call, navigate, notify }) {
     <div class="compare-wrap"><table class="compare-table">
       <thead><tr><th>scan</th><th>sample</th><th>submitted</th><th>state</th><th>θr in common with the first</th><th>max |Δβ|</th><th>rms Δβ</th></tr></thead>
       <tbody>${data.map((d, i) => html`<tr data-testid="compare-row" data-scan=${d.scan.id}>
-        <td><span class="swatch-line" style=${{ background: SERIES_COLOURS[i % SERIES_COLOURS.length] }}></span> <a href=${`#/scan/${d.scan.id}`}>${labels[i]}</a></td>
+        <td><span class="swatch-line" style=${{ background: SERIES_COLORS[i % SERIES_COLORS.length] }}></span> <a href=${`#/scan/${d.scan.id}`}>${labels[i]}</a></td>
         <td>${name.get(d.scan.plan.sample) || d.scan.plan.sample}</td><td>${shortTime(d.scan.submitted_at)}</td><td>${d.scan.state}</td>
         ${i === 0 ? html`<td colspan="3" class="muted">the reference</td>`
           : html`<td>${stats[i - 1].n}</td><td data-testid="compare-maxdiff">${fmt(stats[i - 1].maxAbs, 3)}</td><td>${fmt(stats[i - 1].rms, 3)}</td>`}

@@ -30,13 +30,13 @@ function errorBars(si, errCol) {
   };
 }
 
-function hline(value, scale, colour) {
+function hline(value, scale, color) {
   return (u) => {
     if (value == null) return;
     const y = Math.round(u.valToPos(value, scale, true));
     const ctx = u.ctx;
     ctx.save();
-    ctx.strokeStyle = colour;
+    ctx.strokeStyle = color;
     ctx.setLineDash([6, 4]);
     ctx.beginPath();
     ctx.moveTo(u.bbox.left, y);
@@ -152,13 +152,13 @@ export function betaData(curve, log, fitted = null) {
 
 // Several curves against one θr axis (compare): ys one column per scan, nulls where a scan has
 // no point; colours in order.
-export const SERIES_COLOURS = ['#1565c0', '#e65100', '#2e7d32', '#6a1b9a', '#00838f', '#ad1457'];
+export const SERIES_COLORS = ['#1565c0', '#e65100', '#2e7d32', '#6a1b9a', '#00838f', '#ad1457'];
 export function overlayPlot(el, x, ys, labels, { width, height, ylabel, zeroLine = false }) {
   return new uPlot({
     width, height,
     scales: { x: { time: false } },
     axes: [{ label: 'θr (°)' }, { label: ylabel, size: 70 }],
-    series: [{ label: 'θr' }, ...ys.map((_, i) => ({ label: labels[i], stroke: SERIES_COLOURS[i % SERIES_COLOURS.length], width: 1.5, spanGaps: true, points: { size: 4 } }))],
+    series: [{ label: 'θr' }, ...ys.map((_, i) => ({ label: labels[i], stroke: SERIES_COLORS[i % SERIES_COLORS.length], width: 1.5, spanGaps: true, points: { size: 4 } }))],
     hooks: zeroLine ? { draw: [hline(0, 'y', '#888')] } : {},
   }, [x, ...ys], el);
 }
@@ -223,7 +223,7 @@ export function predictionPlot(el, cols, { nm, width, height }) {
 // u/|value| (parameters mode) or the estimated interpolation error (curve mode), with the
 // target (target_rel_u, tolerance) as a dashed line. cols: logic.js AdaptiveTrack.columns().
 export function adaptivePlot(el, cols, { target, width, height, ylabel }) {
-  const colour = css('--target', '#c62828');
+  const color = css('--target', '#c62828');
   return new uPlot({
     width, height,
     scales: {
@@ -234,8 +234,8 @@ export function adaptivePlot(el, cols, { target, width, height, ylabel }) {
       { label: 'points used', incrs: [1, 2, 5, 10, 20, 50, 100, 200, 500, 1000] },
       { label: ylabel, size: 70, values: (u, splits) => splits.map(decade) },
     ],
-    series: [{ label: 'points' }, ...cols.labels.map((l, i) => ({ label: l, stroke: SERIES_COLOURS[i % SERIES_COLOURS.length], width: 1.5, spanGaps: true, points: { show: true, size: 5 } }))],
-    hooks: { draw: [hline(target, 'y', colour)] },
+    series: [{ label: 'points' }, ...cols.labels.map((l, i) => ({ label: l, stroke: SERIES_COLORS[i % SERIES_COLORS.length], width: 1.5, spanGaps: true, points: { show: true, size: 5 } }))],
+    hooks: { draw: [hline(target, 'y', color)] },
   }, adaptiveData(cols), el);
 }
 

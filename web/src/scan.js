@@ -5,9 +5,9 @@ import { useEffect, useMemo, useRef, useState } from 'preact/hooks';
 import { html, download } from './ui.js';
 import { POINTS_PAGE, AdaptiveTrack, Curve, budgetRows, candidateMarks, channelOf, coalesce, exportFile, fmt, incidences, verdictBadge } from './logic.js';
 import { betaPlot, betaData, lanePlot, laneData, spectrumPlot } from './plot.js';
-import { colourOf } from './colour.js';
+import { colorOf } from './color.js';
 import { AdaptivePanel } from './adaptive.js';
-import tables from 'virtual:colour-tables';
+import tables from 'virtual:color-tables';
 
 // Draws into the two plots, coalescing the points that arrive between frames.
 class LivePlots {
@@ -57,8 +57,8 @@ function PointDetails({ point, nm }) {
     const u = spectrumPlot(ref.current, point, { width: Math.max(280, ref.current.clientWidth || 420), height: 200 });
     return () => u.destroy();
   }, [point]);
-  const m = colourOf(point.measured.wavelengths_nm, point.measured.values, tables);
-  const p = point.predicted ? colourOf(point.predicted.wavelengths_nm, point.predicted.values, tables) : null;
+  const m = colorOf(point.measured.wavelengths_nm, point.measured.values, tables);
+  const p = point.predicted ? colorOf(point.predicted.wavelengths_nm, point.predicted.values, tables) : null;
   const g = point.planned;
   return html`<div class="point-details" data-testid="point-details">
     <h3>Point ${point.index}: θi ${fmt(g.theta_i, 3)}°, θr ${fmt(g.theta_r, 3)}° · max |z| ${fmt(point.z_max, 3)} · ΔE00 ${fmt(point.delta_e00, 3)}${point.diverged ? ' · diverged' : ''}${point.decision ? html` · <span class=${`verdict tone-${verdictBadge({ decision: point.decision }).tone}`} data-testid="point-decision">${verdictBadge({ decision: point.decision }).text}</span>` : ''}</h3>

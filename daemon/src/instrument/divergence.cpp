@@ -80,13 +80,13 @@ Propagated propagate(const std::function<double(const Xyz&, const Xyz&)>& f, con
   return out;
 }
 
-ColourCheck colour_check(const Spectrum& m, const Spectrum& p, const std::vector<double>& u_model,
+ColorCheck color_check(const Spectrum& m, const Spectrum& p, const std::vector<double>& u_model,
                          const std::vector<BudgetEntry>& budget, double tolerance,
                          const twin::Colorimeter& cm, const DivergenceSettings& s) {
   const auto& w = cm.weights();
   const auto xm = cm.xyz(m.values), xp = cm.xyz(p.values);
   const auto& white = cm.white();
-  ColourCheck c;
+  ColorCheck c;
   const double top = std::max(*std::max_element(m.values.begin(), m.values.end()),
                               *std::max_element(p.values.begin(), p.values.end()));
   if (top <= 1.0) {
@@ -175,9 +175,9 @@ PointDivergence evaluate_point(const Spectrum& m, const Spectrum& p, const std::
   }
   d.decision = spectral;
   if (colorimeter) {
-    d.colour = colour_check(m, p, u_model, budget, tolerance, *colorimeter, s);
-    if (d.colour->kind == "ciede2000") d.delta_e00 = d.colour->difference;
-    d.decision = worse(d.decision, parse_decision(d.colour->decision));
+    d.color = color_check(m, p, u_model, budget, tolerance, *colorimeter, s);
+    if (d.color->kind == "ciede2000") d.delta_e00 = d.color->difference;
+    d.decision = worse(d.decision, parse_decision(d.color->decision));
   }
   d.diverged = d.decision == Decision::out_of_tolerance;
   d.inconsistent = d.z_max > s.z_threshold;

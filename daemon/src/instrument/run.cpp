@@ -594,7 +594,7 @@ double Instrument::predict_and_judge(std::size_t gi, PointRecord& p) {
                                   r.colorimeter.get(), divergence_);
     p.z_max = d.z_max;
     p.delta_e00 = d.delta_e00;
-    p.colour = d.colour;
+    p.color = d.color;
     p.decision = decision_text(d.decision);
     p.diverged = d.diverged;
     if (d.inconsistent) p.flags.push_back("inconsistent");

@@ -5,7 +5,7 @@
 // retained topics are current. Skipped where the servers are not installed.
 #include <gtest/gtest.h>
 
-#include "servers.hpp"
+#include "gonio/test/archive_servers.hpp"
 
 namespace gonio::test {
 namespace {

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "gonio/twin/design.hpp"
-#include "harness.hpp"
+#include "gonio/test/daemon_harness.hpp"
 
 namespace gonio::test {
 namespace {

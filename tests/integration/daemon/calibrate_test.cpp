@@ -8,7 +8,7 @@
 //    through the inverse twin at the end of the scan.
 #include <gtest/gtest.h>
 
-#include "harness.hpp"
+#include "gonio/test/daemon_harness.hpp"
 
 namespace gonio::test {
 namespace {

@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "gonio/proto/scan.hpp"
-#include "harness.hpp"
+#include "gonio/test/daemon_harness.hpp"
 
 namespace gonio::test {
 namespace {

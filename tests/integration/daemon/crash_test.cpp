@@ -2,7 +2,7 @@
 // After each, the scan resumes at the next unmeasured point: nothing lost, nothing twice.
 #include <gtest/gtest.h>
 
-#include "harness.hpp"
+#include "gonio/test/daemon_harness.hpp"
 
 namespace gonio::test {
 namespace {

@@ -2,7 +2,7 @@
 // README's main job (`gonioctl demo`) end to end.
 #include <gtest/gtest.h>
 
-#include "harness.hpp"
+#include "gonio/test/daemon_harness.hpp"
 
 namespace gonio::test {
 namespace {

@@ -3,7 +3,7 @@
 // notifications carry the reason that was stored.
 #include <gtest/gtest.h>
 
-#include "harness.hpp"
+#include "gonio/test/daemon_harness.hpp"
 
 namespace gonio::test {
 namespace {

@@ -2,7 +2,7 @@
 // standing in for systemd, as in sd_notify(3)).
 #include <gtest/gtest.h>
 
-#include "harness.hpp"
+#include "gonio/test/daemon_harness.hpp"
 
 namespace gonio::test {
 namespace {

@@ -7,7 +7,7 @@
 //  - a glossy sample roughened by 10 %: out of tolerance, the roughness named, not a gain.
 #include <gtest/gtest.h>
 
-#include "harness.hpp"
+#include "gonio/test/daemon_harness.hpp"
 
 namespace gonio::test {
 namespace {

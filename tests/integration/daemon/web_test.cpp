@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "harness.hpp"
+#include "gonio/test/daemon_harness.hpp"
 
 namespace gonio::test {
 namespace {

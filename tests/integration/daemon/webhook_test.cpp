@@ -5,7 +5,7 @@
 #include <atomic>
 #include <mutex>
 
-#include "harness.hpp"
+#include "gonio/test/daemon_harness.hpp"
 
 namespace gonio::test {
 namespace {

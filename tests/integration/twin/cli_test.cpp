@@ -166,7 +166,7 @@ TEST(GonioTwinCli, ConvertToIssaWritesTheLuminanceFactor) {
   EXPECT_LT(beta, 0.4);
 }
 
-TEST(GonioTwinCli, ConvertKeepsEnergyAndColour) {
+TEST(GonioTwinCli, ConvertKeepsEnergyAndColor) {
   // A glossy conductor: the file's TIS lines (its reflectance as a reader interpolates it)
   // stay below 1 up to grazing incidence, and a spectral table is written as XYZ.
   TempDir dir;

@@ -67,8 +67,8 @@ TEST(Divergence, CiedeWhereLabIsDefinedWithItsOwnUncertainty) {
   const std::vector<double> small(grid.size(), 1e-4);
   const auto same = evaluate_point(Spectrum(grid, grey, small), Spectrum(grid, grey, small), kNone, kNoBudget,
                                    0.5, cm.get(), s);
-  ASSERT_TRUE(same.colour.has_value());
-  EXPECT_EQ(same.colour->kind, "ciede2000");
+  ASSERT_TRUE(same.color.has_value());
+  EXPECT_EQ(same.color->kind, "ciede2000");
   EXPECT_NEAR(same.delta_e00.value(), 0, 1e-9);
   EXPECT_EQ(same.decision, Decision::agrees);
   // A warm against a grey spectrum: ΔE00 far beyond 2 with a small u, while the spectral
@@ -76,16 +76,16 @@ TEST(Divergence, CiedeWhereLabIsDefinedWithItsOwnUncertainty) {
   const auto diff = evaluate_point(Spectrum(grid, warm, small), Spectrum(grid, grey, small), kNone, kNoBudget,
                                    0.5, cm.get(), s);
   EXPECT_GT(diff.delta_e00.value(), 2);
-  EXPECT_GT(diff.colour->u, 0);
-  EXPECT_LT(diff.colour->u, 0.1);
-  EXPECT_EQ(diff.colour->decision, "out_of_tolerance");
+  EXPECT_GT(diff.color->u, 0);
+  EXPECT_LT(diff.color->u, 0.1);
+  EXPECT_EQ(diff.color->decision, "out_of_tolerance");
   EXPECT_EQ(diff.decision, Decision::out_of_tolerance);
   // The same spectra with a large uncertainty: the colour difference is not decidable.
   const std::vector<double> big(grid.size(), 0.2);
   const auto noisy = evaluate_point(Spectrum(grid, warm, big), Spectrum(grid, grey, big), kNone, kNoBudget, 0.5,
                                     cm.get(), s);
-  EXPECT_GT(noisy.colour->u, 5);
-  EXPECT_NE(noisy.colour->decision, "out_of_tolerance") << noisy.delta_e00.value() << " ± " << noisy.colour->u;
+  EXPECT_GT(noisy.color->u, 5);
+  EXPECT_NE(noisy.color->decision, "out_of_tolerance") << noisy.delta_e00.value() << " ± " << noisy.color->u;
   // An infrared-only grid carries no colour.
   EXPECT_EQ(colorimeter_for(WavelengthGrid::parse("1000:1500:100")), nullptr);
 }
@@ -100,20 +100,20 @@ TEST(Divergence, AboveTheDiffuserChromaticityAndLuminanceApartNotCiede) {
   const std::vector<double> u(grid.size(), 0.006);
   DivergenceSettings s;
   const auto d = evaluate_point(Spectrum(grid, m, u), Spectrum(grid, p, u), kNone, kNoBudget, 0.02, cm.get(), s);
-  ASSERT_TRUE(d.colour.has_value());
-  EXPECT_EQ(d.colour->kind, "chromaticity");
+  ASSERT_TRUE(d.color.has_value());
+  EXPECT_EQ(d.color->kind, "chromaticity");
   EXPECT_FALSE(d.delta_e00.has_value());
-  EXPECT_LT(d.colour->difference, 0.002);
-  EXPECT_NEAR(d.colour->luminance_ratio.value(), 1.0, 0.002);
+  EXPECT_LT(d.color->difference, 0.002);
+  EXPECT_NEAR(d.color->luminance_ratio.value(), 1.0, 0.002);
   EXPECT_NE(d.decision, Decision::out_of_tolerance);
   // A 10 % brighter peak (all channels): the luminance is out of a 2 % tolerance.
   std::vector<double> bright = p;
   for (auto& b : bright) b *= 1.1;
   const auto l = evaluate_point(Spectrum(grid, bright, u), Spectrum(grid, p, u), kNone, kNoBudget, 0.02, cm.get(), s);
-  EXPECT_EQ(l.colour->decision, "out_of_tolerance");
+  EXPECT_EQ(l.color->decision, "out_of_tolerance");
 }
 
-TEST(Divergence, ACorrelatedBudgetComponentMovesTheColourLessThanIndependentNoise) {
+TEST(Divergence, ACorrelatedBudgetComponentMovesTheColorLessThanIndependentNoise) {
   // A gain-like component moves every channel together: it changes luminance, not
   // chromaticity, so Δu′v′'s uncertainty stays small while Y's grows.
   const auto grid = WavelengthGrid::visible();
@@ -124,8 +124,8 @@ TEST(Divergence, ACorrelatedBudgetComponentMovesTheColourLessThanIndependentNois
   DivergenceSettings s;
   const auto d = evaluate_point(Spectrum(grid, p, tiny), Spectrum(grid, p, tiny), std::vector<double>(grid.size(), 0.03),
                                 {gain}, 0.02, cm.get(), s);
-  EXPECT_LT(d.colour->u, 1e-4);
-  EXPECT_NEAR(d.colour->luminance_u.value(), 0.01, 1e-3);
+  EXPECT_LT(d.color->u, 1e-4);
+  EXPECT_NEAR(d.color->luminance_u.value(), 0.01, 1e-3);
 }
 
 TEST(Divergence, ReferenceDrift) {

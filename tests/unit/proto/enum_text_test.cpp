@@ -3,31 +3,31 @@
 #include <gtest/gtest.h>
 
 namespace gonio::testenum {
-enum class Colour { red, green, blue };
-inline constexpr EnumNames<Colour, 3> kColourNames{
-    {{Colour::red, "red"}, {Colour::green, "green"}, {Colour::blue, "blue-ish"}}};
-constexpr const auto& enum_names(Colour) { return kColourNames; }
+enum class Color { red, green, blue };
+inline constexpr EnumNames<Color, 3> kColorNames{
+    {{Color::red, "red"}, {Color::green, "green"}, {Color::blue, "blue-ish"}}};
+constexpr const auto& enum_names(Color) { return kColorNames; }
 }  // namespace gonio::testenum
 
 namespace gonio {
 namespace {
 
-using testenum::Colour;
+using testenum::Color;
 
 TEST(EnumText, NamesRoundTrip) {
-  static_assert(to_text(Colour::green) == "green");
-  for (const auto& [v, name] : testenum::kColourNames) {
+  static_assert(to_text(Color::green) == "green");
+  for (const auto& [v, name] : testenum::kColorNames) {
     EXPECT_EQ(to_text(v), name);
-    EXPECT_EQ(from_text<Colour>(name), v);
+    EXPECT_EQ(from_text<Color>(name), v);
   }
-  EXPECT_EQ(to_text(static_cast<Colour>(7)), "?");
-  EXPECT_FALSE(from_text<Colour>("Red").has_value());  // names are exact
+  EXPECT_EQ(to_text(static_cast<Color>(7)), "?");
+  EXPECT_FALSE(from_text<Color>("Red").has_value());  // names are exact
 }
 
 TEST(EnumText, ParseErrorNamesFieldAndAllowedNames) {
-  EXPECT_EQ(parse_enum<Colour>("blue-ish", "paint.colour"), Colour::blue);
+  EXPECT_EQ(parse_enum<Color>("blue-ish", "paint.colour"), Color::blue);
   try {
-    (void)parse_enum<Colour>("purple", "paint.colour");
+    (void)parse_enum<Color>("purple", "paint.colour");
     FAIL();
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), Errc::invalid_argument);

@@ -23,8 +23,8 @@
 
 #include <fmt/format.h>
 
-#include "bsdf/model.hpp"
-#include "bsdf/sampling.hpp"
+#include "gonio/twin/detail/bsdf/model.hpp"
+#include "gonio/twin/detail/bsdf/sampling.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::twin::bsdf {

@@ -4,9 +4,9 @@
 // Reflection only (what the coat transmits is left to the other lobes: a sum does not
 // attenuate them). Two-sided; sampled through the visible normals of wo (the reflection
 // lobe it shares with `conductor`, microfacet.hpp).
-#include "bsdf/fresnel.hpp"
-#include "bsdf/microfacet.hpp"
-#include "bsdf/model.hpp"
+#include "gonio/twin/detail/bsdf/fresnel.hpp"
+#include "gonio/twin/detail/bsdf/microfacet.hpp"
+#include "gonio/twin/detail/bsdf/model.hpp"
 
 namespace gonio::twin::bsdf {
 namespace {

@@ -8,7 +8,7 @@
 // The `beckmann` model is this class with the Beckmann distribution.
 #include "bsdf/conductor.hpp"
 
-#include "bsdf/fresnel.hpp"
+#include "gonio/twin/detail/bsdf/fresnel.hpp"
 
 namespace gonio::twin::bsdf {
 namespace {

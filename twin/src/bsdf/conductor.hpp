@@ -1,8 +1,8 @@
 // Rough conductor shared by `conductor` (GGX) and `beckmann`.
 #pragma once
 
-#include "microfacet.hpp"
-#include "model.hpp"
+#include "gonio/twin/detail/bsdf/microfacet.hpp"
+#include "gonio/twin/detail/bsdf/model.hpp"
 
 namespace gonio::twin::bsdf {
 

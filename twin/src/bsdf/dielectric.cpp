@@ -24,10 +24,10 @@
 // the interface vanish: one delta lobe straight through, weight 1.
 #include <cmath>
 
-#include "bsdf/fresnel.hpp"
-#include "bsdf/microfacet.hpp"
-#include "bsdf/model.hpp"
-#include "bsdf/sampling.hpp"
+#include "gonio/twin/detail/bsdf/fresnel.hpp"
+#include "gonio/twin/detail/bsdf/microfacet.hpp"
+#include "gonio/twin/detail/bsdf/model.hpp"
+#include "gonio/twin/detail/bsdf/sampling.hpp"
 
 namespace gonio::twin::bsdf {
 namespace {

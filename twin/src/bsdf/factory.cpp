@@ -11,8 +11,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "bsdf/model.hpp"
-#include "bsdf/spec.hpp"
+#include "gonio/twin/detail/bsdf/model.hpp"
+#include "gonio/twin/detail/bsdf/spec.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/json_util.hpp"
 

@@ -1,8 +1,8 @@
 // lambert — ideal diffuse reflector: f = albedo / π (Lambert 1760), the reference white's
 // default BSDF. Two-sided; sampled with the cosine-weighted density, which is exactly
 // proportional to f |cos θi|.
-#include "bsdf/model.hpp"
-#include "bsdf/sampling.hpp"
+#include "gonio/twin/detail/bsdf/model.hpp"
+#include "gonio/twin/detail/bsdf/sampling.hpp"
 
 namespace gonio::twin::bsdf {
 namespace {

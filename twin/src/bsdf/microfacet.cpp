@@ -7,11 +7,11 @@
 // using the Distribution of Visible Normals", §4 and appendix), which inverts the CDF of
 // the visible slope along the incident azimuth and draws the other slope from a Gaussian.
 // Then the two-sided reflection lobe built on them (microfacet.hpp).
-#include "bsdf/microfacet.hpp"
+#include "gonio/twin/detail/bsdf/microfacet.hpp"
 
 #include <algorithm>
 
-#include "bsdf/sampling.hpp"
+#include "gonio/twin/detail/bsdf/sampling.hpp"
 
 namespace gonio::twin::bsdf {
 namespace {

@@ -1,7 +1,7 @@
 // mirror — ideal specular reflector with a (spectral) reflectance. It has no density:
 // eval/pdf are zero and sample_wi draws nothing; its single path wi = reflect(wo, n)
 // with weight = reflectance is listed by delta_lobes() for the estimator to treat exactly.
-#include "bsdf/model.hpp"
+#include "gonio/twin/detail/bsdf/model.hpp"
 
 namespace gonio::twin::bsdf {
 namespace {

@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "bsdf/model.hpp"
-#include "bsdf/sampling.hpp"
+#include "gonio/twin/detail/bsdf/model.hpp"
+#include "gonio/twin/detail/bsdf/sampling.hpp"
 
 namespace gonio::twin::bsdf {
 namespace {

@@ -11,7 +11,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "bsdf/spec.hpp"
+#include "gonio/twin/detail/bsdf/spec.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/json_util.hpp"
 #include "gonio/proto/text.hpp"

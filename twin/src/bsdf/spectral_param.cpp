@@ -1,6 +1,6 @@
 // Spectral parameter values of the BSDF spec syntax: parsing, file reading, canonical
 // text and resampling onto the model's wavelength grid (see twin/bsdf_spec.md).
-#include "bsdf/spectral_param.hpp"
+#include "gonio/twin/detail/bsdf/spectral_param.hpp"
 
 #include <cmath>
 #include <filesystem>

@@ -8,7 +8,7 @@
 
 #include <fmt/format.h>
 
-#include "bsdf/model.hpp"
+#include "gonio/twin/detail/bsdf/model.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::twin::bsdf {

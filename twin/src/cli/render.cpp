@@ -144,7 +144,7 @@ void add_render(CLI::App& app) {
       auto opts = *ro;
       parse_environment(*environment, opts.lighting);
       opts.tone_map = parse_enum<ToneMap>(*tone, "--tone-map");
-      opts.colour = !*grey;
+      opts.color = !*grey;
       opts.seed = model->seed;
       opts.threads = model->threads;
       if (opts.max_samples < opts.min_samples)

@@ -1,11 +1,11 @@
 // The twin's flux estimators: randomised QMC with MIS (rqmc) and the founding paper's
 // plain Monte Carlo over pupil and detector (baseline). See estimator.hpp for the integral.
-#include "core/estimator.hpp"
+#include "gonio/twin/detail/core/estimator.hpp"
 
 #include <algorithm>
 #include <limits>
 
-#include "core/sobol.hpp"
+#include "gonio/twin/detail/core/sobol.hpp"
 
 namespace gonio::twin::detail {
 namespace {

@@ -1,4 +1,4 @@
-#include "core/sobol.hpp"
+#include "gonio/twin/detail/core/sobol.hpp"
 
 #include <memory>
 #include <mutex>

@@ -11,8 +11,8 @@
 
 #include <fmt/format.h>
 
-#include "core/estimator.hpp"
-#include "core/sobol.hpp"
+#include "gonio/twin/detail/core/estimator.hpp"
+#include "gonio/twin/detail/core/sobol.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::twin {

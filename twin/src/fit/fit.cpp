@@ -12,9 +12,9 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "core/estimator.hpp"
-#include "core/sobol.hpp"
-#include "fit/solver.hpp"
+#include "gonio/twin/detail/core/estimator.hpp"
+#include "gonio/twin/detail/core/sobol.hpp"
+#include "gonio/twin/detail/fit/solver.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::twin {

@@ -8,7 +8,7 @@
 
 #include <fmt/format.h>
 
-#include "fit/solver.hpp"
+#include "gonio/twin/detail/fit/solver.hpp"
 
 namespace gonio::twin::fit {
 namespace {

@@ -11,7 +11,7 @@
 // measurement uses the same random numbers at every evaluation (common random numbers), so
 // its Monte Carlo error is a fixed, smooth function of the parameters and such steps give
 // derivatives far less noisy than the standard error itself.
-#include "fit/solver.hpp"
+#include "gonio/twin/detail/fit/solver.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -21,7 +21,7 @@
 #include <fmt/format.h>
 #include <unsupported/Eigen/LevenbergMarquardt>
 
-#include "core/sobol.hpp"
+#include "gonio/twin/detail/core/sobol.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::twin::fit {

@@ -12,8 +12,8 @@
 
 #include <fmt/format.h>
 
-#include "bsdf/model.hpp"
-#include "bsdf/spec.hpp"
+#include "gonio/twin/detail/bsdf/model.hpp"
+#include "gonio/twin/detail/bsdf/spec.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/text.hpp"
 #include "gonio/twin/fit.hpp"

@@ -23,8 +23,8 @@
 
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/plot.hpp"
-#include "plot/cairo_util.hpp"
-#include "plot/scale.hpp"
+#include "gonio/twin/detail/plot/cairo_util.hpp"
+#include "gonio/twin/detail/plot/scale.hpp"
 
 namespace gonio::twin {
 namespace detail {

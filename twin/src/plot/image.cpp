@@ -9,7 +9,7 @@
 
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/plot.hpp"
-#include "plot/cairo_util.hpp"
+#include "gonio/twin/detail/plot/cairo_util.hpp"
 
 namespace gonio::twin {
 

@@ -1,6 +1,6 @@
 // Axis scales and tick marks for the line plots: pure functions of the axis settings and
 // the data (scale.hpp), no drawing.
-#include "plot/scale.hpp"
+#include "gonio/twin/detail/plot/scale.hpp"
 
 #include <algorithm>
 #include <limits>

@@ -10,7 +10,7 @@
 
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/render.hpp"
-#include "plot/cairo_util.hpp"
+#include "gonio/twin/detail/plot/cairo_util.hpp"
 
 namespace gonio::twin {
 namespace {
@@ -100,7 +100,7 @@ Image compose_panels(const Panels& p, const RenderOptions& o) {
         const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(size) +
                               static_cast<std::size_t>(x);
         if (m.coverage[i] <= 0) continue;
-        img.set(x0 + x, y, mix(delta_e_colour(m.delta_e[i] / o.delta_e_max), kRenderBackground,
+        img.set(x0 + x, y, mix(delta_e_color(m.delta_e[i] / o.delta_e_max), kRenderBackground,
                                m.coverage[i]));
       }
   }
@@ -110,7 +110,7 @@ Image compose_panels(const Panels& p, const RenderOptions& o) {
   if (bar_w > 0)
     for (int y = bar_top; y <= bar_bottom; ++y) {
       const double t = static_cast<double>(bar_bottom - y) / (bar_bottom - bar_top);
-      for (int x = bar_x; x < bar_x + bar_wd; ++x) img.set(x, y, delta_e_colour(t));
+      for (int x = bar_x; x < bar_x + bar_wd; ++x) img.set(x, y, delta_e_color(t));
     }
 
   // Text through Cairo, over a copy of the image.

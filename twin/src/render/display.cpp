@@ -84,7 +84,7 @@ DeltaEMap delta_e_map(const SphereImage& a, const SphereImage& b, const RenderOp
   return m;
 }
 
-std::array<std::uint8_t, 3> delta_e_colour(double t) {
+std::array<std::uint8_t, 3> delta_e_color(double t) {
   // Dark blue-violet through red and orange to pale yellow: lightness rises monotonically,
   // so the scale reads in grey too. Anchors in sRGB-encoded values.
   static constexpr double kAnchors[][3] = {{0.04, 0.03, 0.12}, {0.32, 0.07, 0.47},

@@ -27,10 +27,10 @@
 
 #include <fmt/format.h>
 
-#include "core/sobol.hpp"
+#include "gonio/twin/detail/core/sobol.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/render.hpp"
-#include "render/colour_bsdf.hpp"
+#include "render/color_bsdf.hpp"
 #include "render/quantile.hpp"
 #include "render/scene.hpp"
 
@@ -58,7 +58,7 @@ class SplitMix {
   std::uint64_t s_;
 };
 
-using render::Colour;
+using render::Color;
 
 // One randomised net of 2^bits points for a pixel sample's six dimensions: (u1, u2) the BSDF
 // direction and (u4, u5) the emitter direction each the first two Sobol dimensions, a
@@ -104,7 +104,7 @@ constexpr int kSilhouetteBatches = 4;  // sample budget of partly covered pixels
 // integrate smooth parts better but leave fewer nets to estimate the error from.
 constexpr int kNetPoints = 8;
 
-void add(Colour& acc, const Colour& f, double w) {
+void add(Color& acc, const Color& f, double w) {
   for (std::size_t k = 0; k < 3; ++k) acc[k] += w * f[k];
 }
 
@@ -117,7 +117,7 @@ struct ControlVariate {
 // The stochastic part of a pixel: the sum of its samples' values, their number and the
 // standard error of its luminance.
 struct Estimate {
-  Colour sum{0, 0, 0};
+  Color sum{0, 0, 0};
   int samples = 0;
   double se = 0;
 };
@@ -126,7 +126,7 @@ struct Estimate {
 struct SphereRender {
   const RenderOptions& o;
   const render::Scene& scene;
-  const render::ColourBsdf& cb;
+  const render::ColorBsdf& cb;
   double centre, radius;
   Vec3 view{0, 0, 1};
   bool stochastic, use_cv;
@@ -138,7 +138,7 @@ struct SphereRender {
   const std::vector<std::uint32_t>* sobol = nullptr;
   int nets_per_batch = 0;
 
-  SphereRender(const RenderOptions& options, const render::Scene& sc, const render::ColourBsdf& b,
+  SphereRender(const RenderOptions& options, const render::Scene& sc, const render::ColorBsdf& b,
                const SphereImage& out)
       : o(options),
         scene(sc),
@@ -179,9 +179,9 @@ struct SphereRender {
   }
 
   // The point key light and the delta lobes, exactly.
-  Colour exact_terms(const Frame& frame, const Vec3& wo,
-                     std::vector<std::pair<Vec3, Colour>>& lobes) const {
-    Colour fixed{0, 0, 0};
+  Color exact_terms(const Frame& frame, const Vec3& wo,
+                     std::vector<std::pair<Vec3, Color>>& lobes) const {
+    Color fixed{0, 0, 0};
     if (scene.point_light()) {
       const Vec3 wl = frame.to_local(scene.key());
       if (wl.z > 0) add(fixed, cb.eval(wl, wo), kPi * wl.z);
@@ -198,7 +198,7 @@ struct SphereRender {
 
   // h about the mirror direction, and its exact expectation A·L̄ + g·(M − A·r) added to fixed.
   ControlVariate control_variate(const Vec3& n, const Frame& frame, const Vec3& wo,
-                                 Colour& fixed) const {
+                                 Color& fixed) const {
     ControlVariate cv;
     cv.r = reflect(view, n);
     cv.l_bar = scene.environment(cv.r);
@@ -216,9 +216,9 @@ struct SphereRender {
 
   // The sum of one net's samples: a BSDF sample and an emitter sample per point, combined by
   // the power heuristic.
-  Colour net_sum(const RqmcNet& net, const Frame& frame, const Vec3& wo,
+  Color net_sum(const RqmcNet& net, const Frame& frame, const Vec3& wo,
                  const ControlVariate& cv) const {
-    Colour sum{0, 0, 0};
+    Color sum{0, 0, 0};
     for (std::uint32_t i = 0; i < net_points; ++i) {
       double u[6];
       net.point(i, u);
@@ -247,7 +247,7 @@ struct SphereRender {
 
   // Batches of nets until the luminance's standard error reaches rel_se or the budget is spent.
   Estimate estimate(int px, int py, const Frame& frame, const Vec3& wo, const ControlVariate& cv,
-                    const Colour& fixed, int budget) const {
+                    const Color& fixed, int budget) const {
     Estimate e;
     double sum_y = 0, sum_y2 = 0;
     int n_nets = 0;
@@ -258,7 +258,7 @@ struct SphereRender {
         // One net: net_points scrambled Sobol points, its mean one independent sample of the
         // pixel for the standard error.
         const RqmcNet net(*sobol, rng, net_bits);
-        const Colour s = net_sum(net, frame, wo, cv);
+        const Color s = net_sum(net, frame, wo, cv);
         add(e.sum, s, 1);
         const double v = s[1] / net_points;
         sum_y += v;
@@ -275,7 +275,7 @@ struct SphereRender {
     }
   }
 
-  void pixel(int px, int py, SphereImage& out, std::vector<std::pair<Vec3, Colour>>& lobes) const {
+  void pixel(int px, int py, SphereImage& out, std::vector<std::pair<Vec3, Color>>& lobes) const {
     const int inside = covered(px, py);
     if (inside == 0) return;
     const std::size_t idx = out.index(px, py);
@@ -288,12 +288,12 @@ struct SphereRender {
     const Vec3 n = shading_normal(px, py);
     const Frame frame = Frame::from_normal(n);
     const Vec3 wo = frame.to_local(view);
-    Colour fixed = exact_terms(frame, wo, lobes);
+    Color fixed = exact_terms(frame, wo, lobes);
     const ControlVariate cv = use_cv ? control_variate(n, frame, wo, fixed) : ControlVariate{};
     const Estimate e = stochastic ? estimate(px, py, frame, wo, cv, fixed, budget) : Estimate{};
-    Colour total = fixed;
+    Color total = fixed;
     if (e.samples > 0) add(total, e.sum, 1.0 / e.samples);
-    if (!o.colour) {
+    if (!o.color) {
       total[0] = 0.3127 / 0.3290 * total[1];
       total[2] = (1 - 0.3127 - 0.3290) / 0.3290 * total[1];
     }
@@ -378,7 +378,7 @@ SphereImage render_sphere(const Bsdf& bsdf, const RenderOptions& o) {
   const std::clock_t c0 = std::clock();
   const render::Scene scene(o.lighting);
   // The control variate's tables are needed only under an environment.
-  const render::ColourBsdf cb(bsdf, o.colour, scene.has_environment(), o.threads);
+  const render::ColorBsdf cb(bsdf, o.color, scene.has_environment(), o.threads);
   const int size = o.size;
   const std::size_t npx = static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
   SphereImage out;
@@ -390,7 +390,7 @@ SphereImage render_sphere(const Bsdf& bsdf, const RenderOptions& o) {
   out.samples.assign(npx, 0);
   const SphereRender r(o, scene, cb, out);
   for_each_row(size, o.threads, [&](int py) {
-    std::vector<std::pair<Vec3, Colour>> lobes;
+    std::vector<std::pair<Vec3, Color>> lobes;
     for (int px = 0; px < size; ++px) r.pixel(px, py, out, lobes);
   });
   out.noise = noise_of(out, o);

@@ -374,7 +374,7 @@ void write_values(std::ostream& os, const std::vector<double>& values, std::size
   os.write(buf.data(), static_cast<std::streamsize>(buf.size()));
 }
 
-void write_colour(std::ostream& os, const std::vector<double>& nm) {
+void write_color(std::ostream& os, const std::vector<double>& nm) {
   if (nm.empty()) {
     os << "COLOR_MODEL monochrome\n";
   } else {
@@ -498,7 +498,7 @@ std::vector<std::string> write_ssdd(std::ostream& out, const TabulatedParts& par
   };
   const auto bsdf = [&](const BsdfTable& t, std::string_view type) {
     os << "\nDATA_TYPE " << type << '\n';
-    write_colour(os, t.wavelengths());
+    write_color(os, t.wavelengths());
     os << "PARAM_TYPE "
        << (t.param() == TableParam::spherical ? "spherical_coordinate_system"
            : t.param() == TableParam::specular ? "specular_coordinate_system"
@@ -519,7 +519,7 @@ std::vector<std::string> write_ssdd(std::ostream& out, const TabulatedParts& par
   };
   const auto specular = [&](const SpecularTable& t, std::string_view type) {
     os << "\nDATA_TYPE " << type << '\n';
-    write_colour(os, t.wavelengths());
+    write_color(os, t.wavelengths());
     os << "PARAM0_LIST " << list_text(t.theta_i()) << '\n';
     if (!t.phi_i().empty()) os << "PARAM1_LIST " << list_text(t.phi_i()) << '\n';
     optional_entries();

@@ -51,14 +51,14 @@ struct SampleSensitivity {
 // The colour of measured against predicted, judged by the same decision rule as the
 // spectrum: CIEDE2000 where CIELAB is defined (β ≤ 1), else the chromaticity distance
 // Δu′v′ and the relative luminance apart.
-struct ColourCheck {
+struct ColorCheck {
   std::string kind;           // "ciede2000" or "chromaticity"
   double difference = 0;      // ΔE00, or Δu′v′
   double u = 0;               // its standard uncertainty
   double limit = 0;           // the acceptance limit
   std::optional<double> luminance_ratio, luminance_u;  // chromaticity: Y_m / Y_p and its u
   std::string decision;
-  friend bool operator==(const ColourCheck&, const ColourCheck&) = default;
+  friend bool operator==(const ColorCheck&, const ColorCheck&) = default;
 };
 
 struct PointRecord {
@@ -81,7 +81,7 @@ struct PointRecord {
   std::vector<double> u_model;      // the twin's u from the instrument's tolerances
   std::vector<BudgetEntry> budget;
   std::vector<SampleSensitivity> sample_sensitivity;
-  std::optional<ColourCheck> colour;
+  std::optional<ColorCheck> color;  // in the API and the store as "colour" (a wire name kept)
   std::vector<std::string> flags;   // "no_prediction", "saturated", "reference_read", ...
   // The photometer's integration time the point's readings used (auto-ranging); nullopt:
   // unknown (a photometer that does not report it, or a point stored before it was kept).
@@ -94,8 +94,8 @@ void to_json(nlohmann::json& j, const BudgetEntry& b);
 void from_json(const nlohmann::json& j, BudgetEntry& b);
 void to_json(nlohmann::json& j, const SampleSensitivity& s);
 void from_json(const nlohmann::json& j, SampleSensitivity& s);
-void to_json(nlohmann::json& j, const ColourCheck& c);
-void from_json(const nlohmann::json& j, ColourCheck& c);
+void to_json(nlohmann::json& j, const ColorCheck& c);
+void from_json(const nlohmann::json& j, ColorCheck& c);
 void to_json(nlohmann::json& j, const PointRecord& p);
 // Strict: unknown keys rejected, spectra validated (used by the store and by clients).
 void from_json(const nlohmann::json& j, PointRecord& p);

@@ -9,9 +9,9 @@
 #include <complex>
 
 // Private headers of the bsdf family: the test exercises them directly.
-#include "../../../../twin/src/bsdf/fresnel.hpp"
-#include "../../../../twin/src/bsdf/microfacet.hpp"
-#include "../../../../twin/src/bsdf/sampling.hpp"
+#include "gonio/twin/detail/bsdf/fresnel.hpp"
+#include "gonio/twin/detail/bsdf/microfacet.hpp"
+#include "gonio/twin/detail/bsdf/sampling.hpp"
 #include "stats.hpp"
 
 namespace gonio::twin {

@@ -21,7 +21,7 @@
 #include "stats.hpp"
 
 // Private header of the bsdf family: the registry of models and their parameter tables.
-#include "../../../../twin/src/bsdf/model.hpp"
+#include "gonio/twin/detail/bsdf/model.hpp"
 
 namespace gonio::twin {
 namespace {

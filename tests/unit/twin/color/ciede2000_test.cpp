@@ -64,7 +64,7 @@ TEST(Ciede2000, MatchesSharmaWuDalal2005TestData) {
   }
 }
 
-TEST(Ciede2000, IsZeroForEqualColoursAndGrowsWithDistance) {
+TEST(Ciede2000, IsZeroForEqualColorsAndGrowsWithDistance) {
   const Lab c{42, 13, -7};
   EXPECT_EQ(delta_e2000(c, c), 0.0);
   const double near = delta_e2000(c, Lab{43, 13, -7});

@@ -130,7 +130,7 @@ TEST(Colorimetry, WhiteIsL100AndGreyFollowsTheCieFormula) {
   EXPECT_NEAR(dark.l, 0.004 * 24389.0 / 27.0, 1e-9);
 }
 
-TEST(Colorimetry, ColouredSpectraHaveTheExpectedHue) {
+TEST(Colorimetry, ColoredSpectraHaveTheExpectedHue) {
   // A reflectance rising to the red is reddish-yellow (a* > 0, b* > 0); its mirror image
   // rising to the blue has b* < 0.
   std::vector<double> red, blue;

@@ -9,7 +9,7 @@
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/point.hpp"
 #include "gonio/twin/fit.hpp"
-#include "ideal_instrument.hpp"
+#include "gonio/test/ideal_instrument.hpp"
 
 namespace gonio::twin {
 namespace {

@@ -15,7 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gonio/twin/fit.hpp"
-#include "ideal_instrument.hpp"
+#include "gonio/test/ideal_instrument.hpp"
 
 namespace gonio::twin {
 namespace {

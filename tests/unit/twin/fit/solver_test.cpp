@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 // Private header of the fit family: the least-squares problem and its solver.
-#include "../../../../twin/src/fit/solver.hpp"
+#include "gonio/twin/detail/fit/solver.hpp"
 
 namespace gonio::twin::fit {
 namespace {

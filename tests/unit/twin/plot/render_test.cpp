@@ -292,7 +292,7 @@ TEST(Render, DeltaLobesReflectTheEnvironment) {
   EXPECT_EQ(dark.luminance_at(24, 24), 0.0);
 }
 
-TEST(Render, ColourFollowsTheSpectrum) {
+TEST(Render, ColorFollowsTheSpectrum) {
   std::vector<double> reddish;
   for (double nm : kGrid) reddish.push_back(nm > 590 ? 0.8 : 0.05);
   const TestLambert red(kGrid, reddish);
@@ -302,11 +302,11 @@ TEST(Render, ColourFollowsTheSpectrum) {
   const auto c = display_rgb(r.xyz[r.index(32, 32)], o);
   EXPECT_GT(c.r, 4 * c.g);
   EXPECT_GT(c.r, 4 * c.b);
-  o.colour = false;  // luminance alone: neutral
+  o.color = false;  // luminance alone: neutral
   const auto grey = display_rgb(render_sphere(red, o).xyz[r.index(32, 32)], o);
   EXPECT_NEAR(grey.r, grey.g, 1e-3);
   EXPECT_NEAR(grey.b, grey.g, 1e-3);
-  o.colour = true;
+  o.color = true;
   const TestLambert one(WavelengthGrid::parse("555"), 0.5);  // one channel: grey
   const auto g = display_rgb(render_sphere(one, o).xyz[r.index(32, 32)], o);
   EXPECT_NEAR(g.r, g.g, 1e-3);
@@ -390,7 +390,7 @@ TEST(Render, DeltaEMapsMeasureTheDifference) {
   // The colour scale gets lighter from 0 to 1, and the figure has a place for everything.
   double last = -1;
   for (int k = 0; k <= 20; ++k) {
-    const auto col = delta_e_colour(k / 20.0);
+    const auto col = delta_e_color(k / 20.0);
     const double y = 0.2126 * srgb_decode(col[0] / 255.0) + 0.7152 * srgb_decode(col[1] / 255.0) +
                      0.0722 * srgb_decode(col[2] / 255.0);
     EXPECT_GT(y, last) << k;

@@ -1,4 +1,4 @@
-// Axis scales and tick marks of the line plots on their own (twin/src/plot/scale.hpp): nice
+// Axis scales and tick marks of the line plots on their own (gonio/twin/detail/plot/scale.hpp): nice
 // steps, tick positions and labels on linear and logarithmic axes, data ranges and the
 // mapping to device coordinates.
 #include <gtest/gtest.h>
@@ -9,7 +9,7 @@
 #include <vector>
 
 // Private header of the plot family: the test exercises it directly.
-#include "../../../../twin/src/plot/scale.hpp"
+#include "gonio/twin/detail/plot/scale.hpp"
 
 namespace gonio::twin::plot {
 namespace {

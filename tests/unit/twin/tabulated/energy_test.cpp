@@ -157,7 +157,7 @@ TEST(TableEnergy, SsddKeepsTheAlbedoOfEveryChannel) {
 
 // Colour through IS-SA: the X, Y and Z blocks of the file, each read as a table and
 // integrated, give the CIELAB of the model's directional reflectance within ΔE00 1.
-TEST(TableColour, CielabRoundTripsThroughIssaXyz) {
+TEST(TableColor, CielabRoundTripsThroughIssaXyz) {
   SKIP_UNLESS_OPTIMISED();
   const auto grid = WavelengthGrid::parse("400:700:10");
   const auto model = make_bsdf(

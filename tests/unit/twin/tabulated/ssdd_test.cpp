@@ -88,7 +88,7 @@ const char* kMaterial =
     "0.5\n"
     "0\n";
 
-TEST(Ssdd, EveryDataTypeColourModelAndParametrization) {
+TEST(Ssdd, EveryDataTypeColorModelAndParametrization) {
   const auto p = read_text(kMaterial);
   ASSERT_TRUE(p.brdf && p.btdf && p.specular_reflectance && p.specular_transmittance);
   EXPECT_EQ(p.name, "blue paint");

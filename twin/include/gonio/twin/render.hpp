@@ -68,7 +68,7 @@ struct RenderOptions {
   double rel_se = 0.01;        // per-pixel target: s.e. of the luminance / luminance
   int min_samples = 32;        // per pixel, also the batch size between convergence checks
   int max_samples = 4096;      // per pixel; pixels that hit it are reported as unconverged
-  bool colour = true;          // false: the luminance alone, in grey
+  bool color = true;          // false: the luminance alone, in grey
   double exposure = 1;         // linear scale before tone mapping
   ToneMap tone_map = ToneMap::clip;
   double delta_e_max = 5;      // top of the ΔE00 colour scale
@@ -140,7 +140,7 @@ DeltaEMap delta_e_map(const SphereImage& reference, const SphereImage& other,
                       const RenderOptions& options);
 
 // The ΔE colour scale: t in [0, 1] → sRGB-encoded colour, dark to light.
-std::array<std::uint8_t, 3> delta_e_colour(double t);
+std::array<std::uint8_t, 3> delta_e_color(double t);
 
 // The figure: spheres left to right, then the ΔE maps, then a scale bar; a caption under
 // every panel. Throws Error(invalid_argument) when sizes or counts disagree.

@@ -50,7 +50,7 @@ struct PointDivergence {
   double z_max = 0;
   std::size_t worst_channel = 0;
   std::optional<double> delta_e00;   // when CIEDE2000 is defined
-  std::optional<ColourCheck> colour; // nullopt without a colorimeter for the grid
+  std::optional<ColorCheck> color; // nullopt without a colorimeter for the grid
   Decision decision = Decision::undecided;
   bool diverged = false;             // decision == out_of_tolerance
   bool inconsistent = false;         // z_max > z_threshold

@@ -1,11 +1,11 @@
-#include "render/colour_bsdf.hpp"
+#include "render/color_bsdf.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <optional>
 #include <thread>
 
-#include "core/sobol.hpp"
+#include "gonio/twin/detail/core/sobol.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/color.hpp"
 
@@ -22,7 +22,7 @@ constexpr std::uint64_t kAlbedoPoints = 1u << 13;  // RQMC points per node
 // Radiance factors per channel → white-aligned XYZ weights: D65 and the CIE 1931 2°
 // observer (the observer of sRGB), X and Z scaled so that a flat spectrum lands on the sRGB
 // white whatever the grid. A grid without visible wavelengths renders grey (channel mean).
-std::array<std::vector<double>, 3> colour_weights(const WavelengthGrid& grid) {
+std::array<std::vector<double>, 3> color_weights(const WavelengthGrid& grid) {
   const std::size_t n = grid.size();
   std::array<std::vector<double>, 3> w;
   for (auto& v : w) v.assign(n, 0.0);
@@ -51,8 +51,8 @@ std::array<std::vector<double>, 3> colour_weights(const WavelengthGrid& grid) {
 
 }  // namespace
 
-ColourBsdf::ColourBsdf(const Bsdf& bsdf, bool colour, bool moments, unsigned threads)
-    : bsdf_(bsdf), colour_(colour), w_(colour_weights(bsdf.wavelengths())) {
+ColorBsdf::ColorBsdf(const Bsdf& bsdf, bool color, bool moments, unsigned threads)
+    : bsdf_(bsdf), color_(color), w_(color_weights(bsdf.wavelengths())) {
   if (const auto* tab = dynamic_cast<const TabulatedBsdf*>(&bsdf)) {
     const auto& parts = tab->parts();
     if (parts.brdf) {
@@ -78,19 +78,19 @@ ColourBsdf::ColourBsdf(const Bsdf& bsdf, bool colour, bool moments, unsigned thr
   if (moments) build_albedo(threads);
 }
 
-Colour ColourBsdf::eval(const Vec3& wi, const Vec3& wo) const {
-  Colour out{0, 0, 0};
+Color ColorBsdf::eval(const Vec3& wi, const Vec3& wo) const {
+  Color out{0, 0, 0};
   if (wi.z <= 0 || wo.z <= 0) return out;
   if (!projected_.empty()) {
     projected_.front().eval(wi, wo, out);
-    if (!colour_) out[0] = out[2] = 0;
+    if (!color_) out[0] = out[2] = 0;
     return out;
   }
   if (dynamic_cast<const TabulatedBsdf*>(&bsdf_) != nullptr) return out;  // no BRDF table
   thread_local std::vector<double> f;
   f.resize(bsdf_.channels());
   bsdf_.eval(wi, wo, f);
-  for (int k = colour_ ? 0 : 1; k < (colour_ ? 3 : 2); ++k) {
+  for (int k = color_ ? 0 : 1; k < (color_ ? 3 : 2); ++k) {
     const auto& w = w_[static_cast<std::size_t>(k)];
     double s = 0;
     for (std::size_t c = 0; c < f.size(); ++c) s += w[c] * f[c];
@@ -99,15 +99,15 @@ Colour ColourBsdf::eval(const Vec3& wi, const Vec3& wo) const {
   return out;
 }
 
-void ColourBsdf::delta(const Vec3& wo, std::vector<std::pair<Vec3, Colour>>& out) const {
+void ColorBsdf::delta(const Vec3& wo, std::vector<std::pair<Vec3, Color>>& out) const {
   out.clear();
   if (!bsdf_.has_delta()) return;
   thread_local std::vector<DeltaLobe> lobes;
   bsdf_.delta_lobes(wo, lobes);
   for (const auto& lobe : lobes) {
     if (lobe.wi.z <= 0 || lobe.weight.size() != bsdf_.channels()) continue;
-    Colour c{0, 0, 0};
-    for (int k = colour_ ? 0 : 1; k < (colour_ ? 3 : 2); ++k) {
+    Color c{0, 0, 0};
+    for (int k = color_ ? 0 : 1; k < (color_ ? 3 : 2); ++k) {
       const auto& w = w_[static_cast<std::size_t>(k)];
       for (std::size_t i = 0; i < w.size(); ++i) c[static_cast<std::size_t>(k)] += w[i] * lobe.weight[i];
     }
@@ -115,7 +115,7 @@ void ColourBsdf::delta(const Vec3& wo, std::vector<std::pair<Vec3, Colour>>& out
   }
 }
 
-void ColourBsdf::build_albedo(unsigned threads) {
+void ColorBsdf::build_albedo(unsigned threads) {
   nodes_.assign(kAlbedoNodes, Node{});
   if (!isotropic_) return;
   const auto& table = detail::SobolTable::get(kAlbedoPoints);
@@ -134,7 +134,7 @@ void ColourBsdf::build_albedo(unsigned threads) {
         u[d] = detail::to_unit(detail::owen_scramble(table[i * detail::kSobolDims + static_cast<std::uint64_t>(d)], scramble[d]));
       const auto s = sample(wo, u[0], {u[1], u[2]});
       if (!s || s->wi.z <= 0 || !(s->pdf > 0)) continue;
-      const Colour f = eval(s->wi, wo);
+      const Color f = eval(s->wi, wo);
       for (std::size_t k = 0; k < 3; ++k) {
         const double w = f[k] * s->wi.z / s->pdf;
         sum.a[k] += w;
@@ -161,7 +161,7 @@ void ColourBsdf::build_albedo(unsigned threads) {
   for (auto& th : pool) th.join();
 }
 
-ColourBsdf::Moments ColourBsdf::moments(const Vec3& wo) const {
+ColorBsdf::Moments ColorBsdf::moments(const Vec3& wo) const {
   const double t = std::acos(std::clamp(wo.z, 0.0, 1.0)) * kRadToDeg;
   const double x = t / 90.0 * (kAlbedoNodes - 1);
   const auto j = std::min<std::size_t>(static_cast<std::size_t>(x), kAlbedoNodes - 2);

@@ -1,7 +1,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync, existsSync } from 'node:fs';
-import { parseCgats, colourOf, xyzToLab, xyzToSrgb, hex } from '../../src/colour.js';
+import { parseCgats, colorOf, xyzToLab, xyzToSrgb, hex } from '../../src/color.js';
 
 const colord = process.env.GONIO_COLORD_DIR || '/usr/share/colord';
 const have = existsSync(`${colord}/cmf/CIE1964-10deg-XYZ.cmf`);
@@ -20,15 +20,15 @@ test('CGATS tables parse with their band count', { skip: !have && 'colord-data i
 });
 
 test('a flat spectrum is neutral: L* from β, a* = b* = 0', { skip: !have && 'colord-data is not installed' }, () => {
-  const white = colourOf(grid, grid.map(() => 1), tables);
+  const white = colorOf(grid, grid.map(() => 1), tables);
   assert.ok(Math.abs(white.lab[0] - 100) < 1e-9);
   // (the 10° white through the 2° sRGB matrix is within a step of #ffffff)
   assert.ok(/^#f[cdef]f[cdef]f[cdef]$/.test(white.hex), white.hex);
-  const grey = colourOf(grid, grid.map(() => 0.18), tables);
+  const grey = colorOf(grid, grid.map(() => 0.18), tables);
   assert.ok(Math.abs(grey.lab[0] - 49.5) < 0.1, String(grey.lab[0]));
   assert.ok(Math.abs(grey.lab[1]) < 1e-9 && Math.abs(grey.lab[2]) < 1e-9);
   // A long-wave reflector is reddish: a* > 0, b* > 0.
-  const orange = colourOf(grid, grid.map((w) => (w > 580 ? 0.6 : 0.08)), tables);
+  const orange = colorOf(grid, grid.map((w) => (w > 580 ? 0.6 : 0.08)), tables);
   assert.ok(orange.lab[1] > 20 && orange.lab[2] > 20, JSON.stringify(orange.lab));
 });
 

@@ -10,7 +10,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "spectral_param.hpp"
+#include "gonio/twin/detail/bsdf/spectral_param.hpp"
 
 namespace gonio::twin::bsdf {
 

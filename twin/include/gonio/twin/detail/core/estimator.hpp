@@ -30,7 +30,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/optics.hpp"
+#include "gonio/twin/detail/core/optics.hpp"
 #include "gonio/twin/bsdf.hpp"
 #include "gonio/twin/twin.hpp"
 

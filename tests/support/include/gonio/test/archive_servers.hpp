@@ -10,7 +10,7 @@
 #include <iterator>
 #include <map>
 
-#include "../daemon/harness.hpp"
+#include "gonio/test/daemon_harness.hpp"
 
 namespace gonio::test {
 

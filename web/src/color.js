@@ -76,7 +76,7 @@ export function hex([r, g, b]) {
 }
 
 // Everything the point details show for one spectrum.
-export function colourOf(nm, beta, tables) {
+export function colorOf(nm, beta, tables) {
   const xyz = spectrumToXyz(nm, beta, tables);
   const white = spectrumToXyz(nm, nm.map(() => 1), tables);
   const lab = xyzToLab(xyz, white);

@@ -25,29 +25,29 @@
 
 namespace gonio::twin::render {
 
-using Colour = std::array<double, 3>;  // X, Y, Z (Y alone in channel 1 for grey renders)
+using Color = std::array<double, 3>;  // X, Y, Z (Y alone in channel 1 for grey renders)
 
-class ColourBsdf {
+class ColorBsdf {
  public:
   // `colour` false: channel 1 (Y) only, the others left 0. With `moments` the albedo and
   // moment tables are built, on `threads` threads (0: hardware concurrency).
-  ColourBsdf(const Bsdf& bsdf, bool colour, bool moments, unsigned threads);
+  ColorBsdf(const Bsdf& bsdf, bool color, bool moments, unsigned threads);
 
   // Projected f(wi, wo) for reflection (wi.z > 0, wo.z > 0; 0 otherwise).
-  Colour eval(const Vec3& wi, const Vec3& wo) const;
+  Color eval(const Vec3& wi, const Vec3& wo) const;
   std::optional<BsdfSample> sample(const Vec3& wo, double u_lobe, Vec2 u) const {
     return bsdf_.sample_wi(wo, u_lobe, u);
   }
   double pdf(const Vec3& wo, const Vec3& wi) const { return bsdf_.pdf(wo, wi); }
   bool has_delta() const noexcept { return bsdf_.has_delta(); }
   // Delta lobes above the surface, projected.
-  void delta(const Vec3& wo, std::vector<std::pair<Vec3, Colour>>& out) const;
+  void delta(const Vec3& wo, std::vector<std::pair<Vec3, Color>>& out) const;
 
   bool isotropic() const noexcept { return isotropic_; }
   bool has_moments() const noexcept { return !nodes_.empty(); }
   // A(wo) and M(wo) (local frame) of the sampler, projected.
   struct Moments {
-    Colour albedo;
+    Color albedo;
     std::array<Vec3, 3> moment;
   };
   Moments moments(const Vec3& wo) const;
@@ -59,12 +59,12 @@ class ColourBsdf {
   void build_albedo(unsigned threads);
 
   const Bsdf& bsdf_;
-  bool colour_;
+  bool color_;
   std::array<std::vector<double>, 3> w_;
   std::vector<BsdfTable> projected_;  // X, Y, Z as three channels; TabulatedBsdf BRDFs only
   bool isotropic_ = true;
   struct Node {
-    Colour a, mx, mz;
+    Color a, mx, mz;
   };
   std::vector<Node> nodes_;           // at θo = k·90°/(n − 1)
 };
