@@ -41,6 +41,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -343,287 +344,327 @@ Result run_clients(const std::string& target, const std::string& uri, const std:
   return res;
 }
 
+struct Options {
+  std::string goniod, connect, token, token_file;
+  std::size_t clients = 64;
+  double seconds = 5, time_scale = 1;
+  bool as_json = false, hostile = false, throughput = false;
+};
+
+// goniod --mock in a fresh state directory with a TCP listener, stopped and removed at the end.
+class Goniod {
+ public:
+  Goniod(std::string exe, double time_scale) {
+    std::string tmpl = (fs::temp_directory_path() / "gonio-load-XXXXXX").string();
+    if (!::mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed");
+    dir_ = tmpl;
+    if (exe.empty()) exe = (fs::read_symlink("/proc/self/exe").parent_path() / "goniod").string();
+    {
+      std::ofstream cfg(dir_ / "load.toml");
+      cfg << "[server]\nlog_level = \"warn\"\nlisten = [\"tcp://127.0.0.1:0\"]\n"
+          << "max_connections = 4096\n\n[instrument.motion]\ndriver = \"mock\"\n"
+          << fmt::format("sample = \"{}\"\ntime_scale = {}\n\n", gonio::daemon::kDemoSampleBsdf, time_scale)
+          << "[instrument.photometer]\ndriver = \"mock\"\n";
+    }
+    pid_ = ::fork();
+    if (pid_ == 0) {
+      const int fd = ::open((dir_ / "goniod.log").c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0640);
+      if (fd >= 0) ::dup2(fd, STDERR_FILENO), ::dup2(fd, STDOUT_FILENO);
+      const auto state = dir_.string(), cfg = (dir_ / "load.toml").string();
+      ::execl(exe.c_str(), exe.c_str(), "--state-dir", state.c_str(), "--config", cfg.c_str(), "--mock",
+              static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    for (int i = 0; i < 300 && uri_.empty(); ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      std::ifstream in(dir_ / "endpoints.json");
+      const auto ep = json::parse(in, nullptr, false);
+      if (ep.is_object())
+        for (const auto& l : ep["listen"])
+          if (l.get<std::string>().starts_with("tcp://")) uri_ = l.get<std::string>();
+    }
+    if (uri_.empty()) {
+      ::kill(pid_, SIGTERM);  // the state directory stays, for its log
+      ::waitpid(pid_, nullptr, 0);
+      throw std::runtime_error("goniod did not start; see " + (dir_ / "goniod.log").string());
+    }
+    std::ifstream tok(dir_ / "admin.token");
+    std::getline(tok, token_);
+  }
+  ~Goniod() {
+    if (pid_ > 0) {
+      ::kill(pid_, SIGTERM);
+      ::waitpid(pid_, nullptr, 0);
+    }
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  Goniod(const Goniod&) = delete;
+  Goniod& operator=(const Goniod&) = delete;
+
+  const std::string& uri() const { return uri_; }
+  const std::string& token() const { return token_; }
+  pid_t pid() const { return pid_; }
+
+ private:
+  fs::path dir_;
+  pid_t pid_ = -1;
+  std::string uri_, token_;
+};
+
+// A sample and a scan long enough to outlast every phase, running with points to page
+// through (with --throughput, at time scale 0).
+std::int64_t start_scan(Client& admin, bool throughput) {
+  admin.call("sample.create", json{{"name", "load"}, {"bsdf", gonio::daemon::kDemoSampleBsdf}});
+  const auto s = admin.call("scan.submit", json{{"sample", "load"},
+                                               {"grids", {throughput ? "in=15,30,45,60;out=-5:80:0.5" : "in=15,30,45,60;out=-5:80:1"}},
+                                               {"repeats", throughput ? 40 : 2}});
+  const auto scan = s["id"].get<std::int64_t>();
+  for (int i = 0; i < 600; ++i) {
+    const auto sc = admin.call("scan.get", json{{"scan", scan}});
+    if (sc["points_done"].get<std::size_t>() >= 10) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return scan;
+}
+
+// The runner's throughput: points per second of the running scan with no client, then with
+// the clients split between system.info and scan.points, then idle again (the mean of the
+// two idle rates is the reference; a drift between them is reported).
+json measure_throughput(Client& admin, const Options& o, const std::string& uri, const std::string& token,
+                        std::int64_t scan, std::vector<Result>& results) {
+  const auto done = [&] { return admin.call("scan.get", json{{"scan", scan}})["points_done"].get<double>(); };
+  const auto idle_rate = [&] {
+    const double a = done();
+    const auto t0 = Clock::now();
+    std::this_thread::sleep_for(std::chrono::duration<double>(o.seconds));
+    return (done() - a) / std::chrono::duration<double>(Clock::now() - t0).count();
+  };
+  const double idle1 = idle_rate();
+  const double a = done();
+  auto r = run_clients("system.info + scan.points", uri, token, o.clients, o.seconds,
+                       {{"system.info", json::object()},
+                        {"scan.points", json{{"scan", scan}, {"offset", 0}, {"limit", 10}}}});
+  const double loaded = (done() - a) / r.seconds;
+  results.push_back(std::move(r));
+  const double idle2 = idle_rate();
+  const auto state = admin.call("scan.get", json{{"scan", scan}})["state"].get<std::string>();
+  if (state != "running")
+    throw std::runtime_error("the scan ended (" + state + ") before the throughput was measured: lower --seconds");
+  const double idle = 0.5 * (idle1 + idle2);
+  return json{{"idle_points_per_s", idle}, {"idle_first", idle1}, {"idle_last", idle2},
+              {"loaded_points_per_s", loaded}, {"loaded_over_idle", idle > 0 ? loaded / idle : 0}};
+}
+
+// scan.pause of a queued scan while 32 viewers hammer scan.export: its latency.
+json measure_control(Client& admin, const std::string& uri, const std::string& token, std::int64_t scan,
+                     double seconds) {
+  const auto viewer_token = admin.call("auth.create_token", json{{"name", "load-viewer"}, {"role", "viewer"}})["token"].get<std::string>();
+  const auto queued = admin.call("scan.submit", json{{"sample", "load"}, {"geometries", {"45as15"}},
+                                                      {"not_before", "2999-01-01T00:00:00Z"}})["id"];
+  std::atomic<bool> stop{false};
+  std::atomic<std::size_t> exports{0};
+  std::vector<std::thread> viewers;
+  for (int i = 0; i < 32; ++i)
+    viewers.emplace_back([&] {
+      try {
+        Client v(uri, std::chrono::seconds(60));
+        v.login(viewer_token);
+        while (!stop.load()) {
+          v.call("scan.export", json{{"scan", scan}, {"format", "csv"}});
+          ++exports;
+        }
+      } catch (const std::exception&) {
+      }
+    });
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  std::vector<double> pause_ms;
+  {
+    Client tech(uri, std::chrono::seconds(60));
+    tech.login(token);
+    const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+    while (Clock::now() < end) {
+      const auto t0 = Clock::now();
+      tech.call("scan.pause", json{{"scan", queued}});
+      pause_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+      tech.call("scan.resume", json{{"scan", queued}});
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  }
+  stop = true;
+  for (auto& t : viewers) t.join();
+  return json{{"viewers", 32}, {"exports", exports.load()}, {"pauses", pause_ms.size()},
+              {"pause_p50_ms", quantile(pause_ms, 0.5)},
+              {"pause_p99_ms", quantile(pause_ms, 0.99)},
+              {"pause_max_ms", pause_ms.empty() ? NAN : pause_ms.back()}};
+}
+
+// The hostile phases (see the top of the file), goniod's peak RSS after each.
+json measure_hostile(Client& admin, const Goniod& g, std::int64_t scan, double seconds) {
+  json out = json::object();
+  Hostile h{g.uri(), g.token(), scan};
+  json single = json::array();
+  for (int kind = 0; kind <= 5; ++kind) {
+    h.act(kind);
+    single.push_back(json{{"kind", kind}, {"peak_rss_mib", peak_rss_mib(g.pid())}});
+  }
+  out["single_peak_rss_mib"] = peak_rss_mib(g.pid());
+  std::atomic<std::size_t> acts{0};
+  {
+    std::vector<std::thread> ts;
+    const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+    for (int i = 0; i < 64; ++i)
+      ts.emplace_back([&, i] {
+        for (int n = 0; Clock::now() < end; ++n) {
+          try {
+            h.act((i + n) % 9);
+            ++acts;
+          } catch (const std::exception&) {
+          }
+        }
+      });
+    for (auto& t : ts) t.join();
+  }
+  out["flood_clients"] = 64;
+  out["flood_acts"] = acts.load();
+  out["flood_peak_rss_mib"] = peak_rss_mib(g.pid());
+  out["control"] = measure_control(admin, g.uri(), g.token(), scan, seconds);
+  out["peak_rss_mib"] = peak_rss_mib(g.pid());
+  out["single"] = single;
+  out["net"] = admin.call("system.info")["net"];
+  return out;
+}
+
+struct Report {
+  std::vector<Result> results;
+  json before, after, scan, throughput = nullptr, hostile = json::object();
+  std::int64_t scan_id = 0;
+};
+
+void print(const Report& rep, const Options& o) {
+  json out = json::array();
+  gonio::daemon::Table t({"target", "clients", "requests", "req/s", "p50 ms", "p99 ms", "max ms", "errors"});
+  for (auto r : rep.results) {
+    const double p50 = quantile(r.latency_ms, 0.5), p99 = quantile(r.latency_ms, 0.99);
+    const double mx = r.latency_ms.empty() ? NAN : r.latency_ms.back();
+    const double rps = static_cast<double>(r.requests) / r.seconds;
+    t.add({r.target, std::to_string(r.clients), std::to_string(r.requests), fmt::format("{:.0f}", rps),
+           fmt::format("{:.3f}", p50), fmt::format("{:.3f}", p99), fmt::format("{:.3f}", mx),
+           std::to_string(r.errors)});
+    out.push_back(json{{"target", r.target}, {"clients", r.clients}, {"requests", r.requests},
+                       {"throughput_rps", rps}, {"p50_ms", p50}, {"p99_ms", p99}, {"max_ms", mx},
+                       {"errors", r.errors}});
+  }
+  const auto& runner = rep.after["runner"];
+  const double rss_mib = rep.after["rss_bytes"].get<double>() / (1024.0 * 1024.0);
+  const auto points_during = runner["points_measured"].get<std::int64_t>() -
+                             rep.before["runner"]["points_measured"].get<std::int64_t>();
+  if (o.as_json) {
+    std::cout << json{{"results", out},           {"goniod_rss_mib", rss_mib},
+                      {"runner", runner},         {"scan", rep.scan},
+                      {"points_during_run", points_during}, {"hostile", rep.hostile},
+                      {"throughput", rep.throughput}}
+                     .dump(2)
+              << "\n";
+    return;
+  }
+  std::cout << t.render();
+  std::cout << fmt::format(
+      "goniod: rss {:.1f} MiB; scan {} {} with {} points measured during the run; runner's own time "
+      "per point p50 {} ms, p99 {} ms, max {} ms (last {} points)\n",
+      rss_mib, rep.scan_id, rep.scan.is_null() ? "-" : gonio::daemon::cell(rep.scan["state"]), points_during,
+      gonio::daemon::cell(runner["overhead_ms_p50"]), gonio::daemon::cell(runner["overhead_ms_p99"]),
+      gonio::daemon::cell(runner["overhead_ms_max"]), gonio::daemon::cell(runner["overhead_window"]));
+  if (const auto& tp = rep.throughput; !tp.is_null())
+    std::cout << fmt::format(
+        "throughput: the scan measured {:.1f} points/s idle ({:.1f} before, {:.1f} after) and {:.1f} "
+        "under {} clients: {:.0f} % of idle\n",
+        tp["idle_points_per_s"].get<double>(), tp["idle_first"].get<double>(), tp["idle_last"].get<double>(),
+        tp["loaded_points_per_s"].get<double>(), o.clients, 100 * tp["loaded_over_idle"].get<double>());
+  if (const auto& h = rep.hostile; !h.empty()) {
+    const auto& ctl = h["control"];
+    std::cout << fmt::format(
+        "hostile: goniod peak RSS {:.1f} MiB after single requests, {:.1f} MiB after {} clients "
+        "({} acts); scan.pause under {} export viewers ({} exports): p50 {:.2f} ms, p99 {:.2f} ms, "
+        "max {:.2f} ms ({} pauses); net {}\n",
+        h["single_peak_rss_mib"].get<double>(), h["flood_peak_rss_mib"].get<double>(), h["flood_clients"].get<int>(),
+        h["flood_acts"].get<std::size_t>(), ctl["viewers"].get<int>(), ctl["exports"].get<std::size_t>(),
+        ctl["pause_p50_ms"].get<double>(), ctl["pause_p99_ms"].get<double>(), ctl["pause_max_ms"].get<double>(),
+        ctl["pauses"].get<std::size_t>(), h["net"].dump());
+  }
+}
+
+// Every target against goniod (its own, or the one at --connect), the echo baseline first.
+void run(Options o) {
+  std::optional<Goniod> own;
+  std::string uri = o.connect, token = o.token;
+  if (uri.empty()) {
+    own.emplace(o.goniod, o.time_scale);
+    uri = own->uri();
+    token = own->token();
+  } else if (token.empty() && !o.token_file.empty()) {
+    std::ifstream tok(o.token_file);
+    std::getline(tok, token);
+  }
+  Client admin(uri, std::chrono::seconds(30));
+  if (!token.empty()) admin.login(token);
+  Report rep;
+  if (own) {
+    rep.scan_id = start_scan(admin, o.throughput);
+  } else {
+    const auto list = admin.call("scan.list", json{{"limit", 1}});
+    if (!list.empty()) rep.scan_id = list[0]["id"].get<std::int64_t>();
+  }
+  {
+    EchoServer echo;
+    rep.results.push_back(run_clients("echo (baseline)", echo.uri(), "", o.clients, o.seconds, {{"system.info", json::object()}}));
+  }
+  rep.before = admin.call("system.info");
+  rep.results.push_back(run_clients("system.info", uri, token, o.clients, o.seconds, {{"system.info", json::object()}}));
+  if (rep.scan_id)
+    rep.results.push_back(run_clients("scan.points", uri, token, o.clients, o.seconds,
+                                      {{"scan.points", json{{"scan", rep.scan_id}, {"offset", 0}, {"limit", 10}}}}));
+  if (o.throughput && rep.scan_id) rep.throughput = measure_throughput(admin, o, uri, token, rep.scan_id, rep.results);
+  rep.after = admin.call("system.info");
+  rep.scan = rep.scan_id ? admin.call("scan.get", json{{"scan", rep.scan_id}}) : json(nullptr);
+  if (o.hostile && own && rep.scan_id) rep.hostile = measure_hostile(admin, *own, rep.scan_id, o.seconds);
+  print(rep, o);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"gonio-load — goniod latency and throughput beside a loopback echo baseline"};
-  std::string goniod, connect, token, token_file;
-  std::size_t clients = 64;
-  double seconds = 5, time_scale = 1;
-  bool as_json = false;
-  app.add_option("--goniod", goniod, "goniod to start (default: next to gonio-load)");
-  app.add_option("--connect", connect, "measure a running goniod at tcp://HOST:PORT instead");
-  app.add_option("--token", token, "bearer token for --connect");
-  app.add_option("--token-file", token_file, "file with the token for --connect");
-  app.add_option("--clients", clients, "concurrent clients")->check(CLI::Range(1, 1024));
-  app.add_option("--seconds", seconds, "duration of each target")->check(CLI::Range(0.2, 3600.0));
-  app.add_option("--time-scale", time_scale, "the mock's real-time factor (keeps the scan running)");
-  app.add_flag("--json", as_json, "print the figures as JSON");
-  bool hostile = false, throughput = false;
+  Options o;
+  app.add_option("--goniod", o.goniod, "goniod to start (default: next to gonio-load)");
+  app.add_option("--connect", o.connect, "measure a running goniod at tcp://HOST:PORT instead");
+  app.add_option("--token", o.token, "bearer token for --connect");
+  app.add_option("--token-file", o.token_file, "file with the token for --connect");
+  app.add_option("--clients", o.clients, "concurrent clients")->check(CLI::Range(1, 1024));
+  app.add_option("--seconds", o.seconds, "duration of each target")->check(CLI::Range(0.2, 3600.0));
+  app.add_option("--time-scale", o.time_scale, "the mock's real-time factor (keeps the scan running)");
+  app.add_flag("--json", o.as_json, "print the figures as JSON");
   app.add_option("--client-nice", g_client_nice,
                  "run the client threads this much nicer (0–19): clients on another machine take "
                  "no CPU from goniod")
       ->check(CLI::Range(0, 19));
-  app.add_flag("--throughput", throughput,
+  app.add_flag("--throughput", o.throughput,
                "also measure the scan's points per second idle and under the clients (a long scan "
                "on the mock at time scale 0)");
-  app.add_flag("--hostile", hostile, "also measure goniod under hostile clients (peak RSS, control latency under an export flood)");
+  app.add_flag("--hostile", o.hostile, "also measure goniod under hostile clients (peak RSS, control latency under an export flood)");
   CLI11_PARSE(app, argc, argv);
-  if (throughput) {
-    if (!connect.empty()) {
+  if (o.throughput) {
+    if (!o.connect.empty()) {
       std::cerr << "gonio-load: --throughput starts its own goniod (not with --connect)\n";
       return 2;
     }
-    time_scale = 0;
+    o.time_scale = 0;
   }
-
-  pid_t child = -1;
-  fs::path dir;
-  const auto cleanup = [&] {
-    if (child > 0) {
-      ::kill(child, SIGTERM);
-      ::waitpid(child, nullptr, 0);
-      child = -1;
-    }
-  };
   try {
-    std::string uri = connect;
-    if (uri.empty()) {
-      std::string tmpl = (fs::temp_directory_path() / "gonio-load-XXXXXX").string();
-      if (!::mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed");
-      dir = tmpl;
-      if (goniod.empty()) goniod = (fs::read_symlink("/proc/self/exe").parent_path() / "goniod").string();
-      {
-        std::ofstream cfg(dir / "load.toml");
-        cfg << "[server]\nlog_level = \"warn\"\nlisten = [\"tcp://127.0.0.1:0\"]\n"
-            << "max_connections = 4096\n\n[instrument.motion]\ndriver = \"mock\"\n"
-            << fmt::format("sample = \"{}\"\ntime_scale = {}\n\n", gonio::daemon::kDemoSampleBsdf, time_scale)
-            << "[instrument.photometer]\ndriver = \"mock\"\n";
-      }
-      child = ::fork();
-      if (child == 0) {
-        const int fd = ::open((dir / "goniod.log").c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0640);
-        if (fd >= 0) ::dup2(fd, STDERR_FILENO), ::dup2(fd, STDOUT_FILENO);
-        const auto state = dir.string(), cfg = (dir / "load.toml").string();
-        ::execl(goniod.c_str(), goniod.c_str(), "--state-dir", state.c_str(), "--config", cfg.c_str(), "--mock",
-                static_cast<char*>(nullptr));
-        ::_exit(127);
-      }
-      for (int i = 0; i < 300 && uri.empty(); ++i) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(50));
-        std::ifstream in(dir / "endpoints.json");
-        const auto ep = json::parse(in, nullptr, false);
-        if (ep.is_object())
-          for (const auto& l : ep["listen"])
-            if (l.get<std::string>().starts_with("tcp://")) uri = l.get<std::string>();
-      }
-      if (uri.empty()) throw std::runtime_error("goniod did not start; see " + (dir / "goniod.log").string());
-      std::ifstream tok(dir / "admin.token");
-      std::getline(tok, token);
-    } else if (token.empty() && !token_file.empty()) {
-      std::ifstream tok(token_file);
-      std::getline(tok, token);
-    }
-
-    Client admin(uri, std::chrono::seconds(30));
-    if (!token.empty()) admin.login(token);
-    std::int64_t scan = 0;
-    if (!dir.empty()) {
-      admin.call("sample.create", json{{"name", "load"}, {"bsdf", gonio::daemon::kDemoSampleBsdf}});
-      // With --throughput, a scan long enough to outlast every phase at time scale 0.
-      const auto s = admin.call("scan.submit", json{{"sample", "load"},
-                                                   {"grids", {throughput ? "in=15,30,45,60;out=-5:80:0.5" : "in=15,30,45,60;out=-5:80:1"}},
-                                                   {"repeats", throughput ? 40 : 2}});
-      scan = s["id"].get<std::int64_t>();
-      // Wait until the scan runs and has points to page through.
-      for (int i = 0; i < 600; ++i) {
-        const auto sc = admin.call("scan.get", json{{"scan", scan}});
-        if (sc["points_done"].get<std::size_t>() >= 10) break;
-        std::this_thread::sleep_for(std::chrono::milliseconds(100));
-      }
-    } else {
-      const auto list = admin.call("scan.list", json{{"limit", 1}});
-      if (!list.empty()) scan = list[0]["id"].get<std::int64_t>();
-    }
-
-    std::vector<Result> results;
-    {
-      EchoServer echo;
-      results.push_back(run_clients("echo (baseline)", echo.uri(), "", clients, seconds, {{"system.info", json::object()}}));
-    }
-    const auto before = admin.call("system.info");
-    results.push_back(run_clients("system.info", uri, token, clients, seconds, {{"system.info", json::object()}}));
-    if (scan)
-      results.push_back(run_clients("scan.points", uri, token, clients, seconds,
-                                    {{"scan.points", json{{"scan", scan}, {"offset", 0}, {"limit", 10}}}}));
-    // The runner's throughput: points per second of the running scan with no client, then
-    // with the clients split between system.info and scan.points, then idle again (the
-    // mean of the two idle rates is the reference; a drift between them is reported).
-    json throughput_out = nullptr;
-    if (throughput && scan) {
-      const auto done = [&] { return admin.call("scan.get", json{{"scan", scan}})["points_done"].get<double>(); };
-      const auto idle_rate = [&] {
-        const double a = done();
-        const auto t0 = Clock::now();
-        std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
-        return (done() - a) / std::chrono::duration<double>(Clock::now() - t0).count();
-      };
-      const double idle1 = idle_rate();
-      const double a = done();
-      auto r = run_clients("system.info + scan.points", uri, token, clients, seconds,
-                           {{"system.info", json::object()},
-                            {"scan.points", json{{"scan", scan}, {"offset", 0}, {"limit", 10}}}});
-      const double loaded = (done() - a) / r.seconds;
-      results.push_back(std::move(r));
-      const double idle2 = idle_rate();
-      const auto state = admin.call("scan.get", json{{"scan", scan}})["state"].get<std::string>();
-      if (state != "running")
-        throw std::runtime_error("the scan ended (" + state + ") before the throughput was measured: lower --seconds");
-      const double idle = 0.5 * (idle1 + idle2);
-      throughput_out = json{{"idle_points_per_s", idle}, {"idle_first", idle1}, {"idle_last", idle2},
-                            {"loaded_points_per_s", loaded}, {"loaded_over_idle", idle > 0 ? loaded / idle : 0}};
-    }
-    const auto after = admin.call("system.info");
-    const auto sc = scan ? admin.call("scan.get", json{{"scan", scan}}) : json(nullptr);
-
-    json hostile_out = json::object();
-    if (hostile && child > 0 && scan) {
-      Hostile h{uri, token, scan};
-      // single: one hostile request at a time.
-      json single = json::array();
-      for (int kind = 0; kind <= 5; ++kind) {
-        h.act(kind);
-        single.push_back(json{{"kind", kind}, {"peak_rss_mib", peak_rss_mib(child)}});
-      }
-      hostile_out["single_peak_rss_mib"] = peak_rss_mib(child);
-      // flood: 64 clients, each acting in a loop.
-      std::atomic<std::size_t> acts{0};
-      {
-        std::vector<std::thread> ts;
-        const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
-        for (int i = 0; i < 64; ++i)
-          ts.emplace_back([&, i] {
-            for (int n = 0; Clock::now() < end; ++n) {
-              try {
-                h.act((i + n) % 9);
-                ++acts;
-              } catch (const std::exception&) {
-              }
-            }
-          });
-        for (auto& t : ts) t.join();
-      }
-      hostile_out["flood_clients"] = 64;
-      hostile_out["flood_acts"] = acts.load();
-      hostile_out["flood_peak_rss_mib"] = peak_rss_mib(child);
-      // control: scan.pause of a queued scan while 32 viewers hammer scan.export.
-      const auto viewer_token = admin.call("auth.create_token", json{{"name", "load-viewer"}, {"role", "viewer"}})["token"].get<std::string>();
-      const auto queued = admin.call("scan.submit", json{{"sample", "load"}, {"geometries", {"45as15"}},
-                                                          {"not_before", "2999-01-01T00:00:00Z"}})["id"];
-      std::atomic<bool> stop{false};
-      std::atomic<std::size_t> exports{0};
-      std::vector<std::thread> viewers;
-      for (int i = 0; i < 32; ++i)
-        viewers.emplace_back([&] {
-          try {
-            Client v(uri, std::chrono::seconds(60));
-            v.login(viewer_token);
-            while (!stop.load()) {
-              v.call("scan.export", json{{"scan", scan}, {"format", "csv"}});
-              ++exports;
-            }
-          } catch (const std::exception&) {
-          }
-        });
-      std::this_thread::sleep_for(std::chrono::milliseconds(500));
-      std::vector<double> pause_ms;
-      {
-        Client tech(uri, std::chrono::seconds(60));
-        tech.login(token);
-        const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
-        while (Clock::now() < end) {
-          const auto t0 = Clock::now();
-          tech.call("scan.pause", json{{"scan", queued}});
-          pause_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-          tech.call("scan.resume", json{{"scan", queued}});
-          std::this_thread::sleep_for(std::chrono::milliseconds(20));
-        }
-      }
-      stop = true;
-      for (auto& t : viewers) t.join();
-      hostile_out["control"] = json{{"viewers", 32}, {"exports", exports.load()}, {"pauses", pause_ms.size()},
-                                    {"pause_p50_ms", quantile(pause_ms, 0.5)},
-                                    {"pause_p99_ms", quantile(pause_ms, 0.99)},
-                                    {"pause_max_ms", pause_ms.empty() ? NAN : pause_ms.back()}};
-      hostile_out["peak_rss_mib"] = peak_rss_mib(child);
-      hostile_out["single"] = single;
-      hostile_out["net"] = admin.call("system.info")["net"];
-    }
-
-    json out = json::array();
-    gonio::daemon::Table t({"target", "clients", "requests", "req/s", "p50 ms", "p99 ms", "max ms", "errors"});
-    for (auto& r : results) {
-      const double p50 = quantile(r.latency_ms, 0.5), p99 = quantile(r.latency_ms, 0.99);
-      const double mx = r.latency_ms.empty() ? NAN : r.latency_ms.back();
-      const double rps = static_cast<double>(r.requests) / r.seconds;
-      t.add({r.target, std::to_string(r.clients), std::to_string(r.requests), fmt::format("{:.0f}", rps),
-             fmt::format("{:.3f}", p50), fmt::format("{:.3f}", p99), fmt::format("{:.3f}", mx),
-             std::to_string(r.errors)});
-      out.push_back(json{{"target", r.target}, {"clients", r.clients}, {"requests", r.requests},
-                         {"throughput_rps", rps}, {"p50_ms", p50}, {"p99_ms", p99}, {"max_ms", mx},
-                         {"errors", r.errors}});
-    }
-    const auto& runner = after["runner"];
-    const double rss_mib = after["rss_bytes"].get<double>() / (1024.0 * 1024.0);
-    if (as_json) {
-      std::cout << json{{"results", out},
-                        {"goniod_rss_mib", rss_mib},
-                        {"runner", runner},
-                        {"scan", sc},
-                        {"points_during_run", after["runner"]["points_measured"].get<std::int64_t>() -
-                                                  before["runner"]["points_measured"].get<std::int64_t>()},
-                        {"hostile", hostile_out},
-                        {"throughput", throughput_out}}
-                       .dump(2)
-                << "\n";
-    } else {
-      std::cout << t.render();
-      std::cout << fmt::format(
-          "goniod: rss {:.1f} MiB; scan {} {} with {} points measured during the run; runner's own time "
-          "per point p50 {} ms, p99 {} ms, max {} ms (last {} points)\n",
-          rss_mib, scan, sc.is_null() ? "-" : gonio::daemon::cell(sc["state"]),
-          after["runner"]["points_measured"].get<std::int64_t>() - before["runner"]["points_measured"].get<std::int64_t>(),
-          gonio::daemon::cell(runner["overhead_ms_p50"]), gonio::daemon::cell(runner["overhead_ms_p99"]),
-          gonio::daemon::cell(runner["overhead_ms_max"]), gonio::daemon::cell(runner["overhead_window"]));
-      if (!throughput_out.is_null())
-        std::cout << fmt::format(
-            "throughput: the scan measured {:.1f} points/s idle ({:.1f} before, {:.1f} after) and {:.1f} "
-            "under {} clients: {:.0f} % of idle\n",
-            throughput_out["idle_points_per_s"].get<double>(), throughput_out["idle_first"].get<double>(),
-            throughput_out["idle_last"].get<double>(), throughput_out["loaded_points_per_s"].get<double>(), clients,
-            100 * throughput_out["loaded_over_idle"].get<double>());
-      if (!hostile_out.empty()) {
-        const auto& ctl = hostile_out["control"];
-        std::cout << fmt::format(
-            "hostile: goniod peak RSS {:.1f} MiB after single requests, {:.1f} MiB after {} clients "
-            "({} acts); scan.pause under {} export viewers ({} exports): p50 {:.2f} ms, p99 {:.2f} ms, "
-            "max {:.2f} ms ({} pauses); net {}\n",
-            hostile_out["single_peak_rss_mib"].get<double>(), hostile_out["flood_peak_rss_mib"].get<double>(),
-            hostile_out["flood_clients"].get<int>(), hostile_out["flood_acts"].get<std::size_t>(),
-            ctl["viewers"].get<int>(), ctl["exports"].get<std::size_t>(), ctl["pause_p50_ms"].get<double>(),
-            ctl["pause_p99_ms"].get<double>(), ctl["pause_max_ms"].get<double>(), ctl["pauses"].get<std::size_t>(),
-            hostile_out["net"].dump());
-      }
-    }
-    cleanup();
-    if (!dir.empty()) {
-      std::error_code ec;
-      fs::remove_all(dir, ec);
-    }
+    run(o);
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "gonio-load: " << e.what() << "\n";
-    cleanup();
     return 1;
   }
 }

@@ -348,6 +348,153 @@ std::size_t ScanEvidence::candidates() const noexcept {
   return n;
 }
 
+std::vector<ScanEvidence::Fitted> ScanEvidence::fit_candidates(const std::vector<std::size_t>& instrument,
+                                                               const std::vector<std::size_t>& sample) const {
+  std::vector<Fitted> cands;
+  // The instrument's candidate causes are its arms and its white; the apertures stay
+  // nuisance inputs held to their data sheet (a few percent of an aperture moves β little
+  // and alike everywhere, so a free aperture would soak up whatever else is left).
+  for (auto j : instrument)
+    if (is_candidate(j)) cands.push_back({j, solve(instrument, {j})});
+  for (auto k : sample) {
+    auto cols = instrument;
+    cols.push_back(k);
+    cands.push_back({k, solve(cols, {k})});
+  }
+  // Extrapolations of the linear model are no evidence (see max_change).
+  std::erase_if(cands, [&](const Fitted& c) {
+    const auto pos = static_cast<std::size_t>(std::find(c.fit.index.begin(), c.fit.index.end(), c.column) -
+                                              c.fit.index.begin());
+    return pos >= c.fit.theta.size() || !(std::abs(c.fit.theta[pos]) <= names_[c.column].max_change);
+  });
+  std::sort(cands.begin(), cands.end(), [](const Fitted& a, const Fitted& b) { return a.fit.chi2 < b.fit.chi2; });
+  return cands;
+}
+
+// The cause a candidate names: its free parameter's value and u (scaled by √(χ²/dof) when
+// the fit is worse than its uncertainties say).
+VerdictCause ScanEvidence::cause_of(const Fitted& c) const {
+  const auto& col = names_[c.column];
+  const auto pos =
+      static_cast<std::size_t>(std::find(c.fit.index.begin(), c.fit.index.end(), c.column) - c.fit.index.begin());
+  const double scale = std::sqrt(std::max(1.0, c.fit.chi2 / dof(1)));
+  return VerdictCause{col.kind, col.name, col.nominal + c.fit.theta[pos], c.fit.u[pos] * scale, col.nominal};
+}
+
+// The per-band mean relative difference left by `fit` (its instrument inputs removed), with
+// its uncertainty: the points' own and the instrument's systematic inputs' (posterior).
+ScanEvidence::BandResult ScanEvidence::band_decision(const Fit& fit) const {
+  const std::size_t bands = std::min<std::size_t>(3, channels_);
+  BandResult out;
+  const double scale = std::sqrt(std::max(1.0, fit.chi2 / dof(fit.free.size())));
+  const auto theta_of = [&](std::size_t column) {
+    const auto it = std::find(fit.index.begin(), fit.index.end(), column);
+    return it == fit.index.end() ? 0.0 : fit.theta[static_cast<std::size_t>(it - fit.index.begin())];
+  };
+  for (std::size_t band = 0; band < bands; ++band) {
+    const std::size_t lo = band * channels_ / bands, hi = (band + 1) * channels_ / bands;
+    double s0 = 0, s1 = 0;
+    std::vector<double> sj(fit.index.size(), 0.0);
+    for (const auto& pt : points_)
+      for (std::size_t c = lo; c < hi; ++c) {
+        if (!(pt.v[c] > 0) || pt.p[c] == 0) continue;
+        // The residual with the fitted instrument inputs' effect removed.
+        double r = pt.r[c];
+        for (std::size_t i = 0; i < fit.index.size(); ++i) {
+          const auto j = fit.index[i];
+          if (names_[j].kind == "sample") continue;
+          const double th = fit.theta[i];
+          const double c2 = pt.curvature[j].empty() ? 0.0 : pt.curvature[j][c];
+          double slope = pt.columns[j][c] + c2 * th;
+          r -= pt.columns[j][c] * th + 0.5 * c2 * th * th;
+          if (!pt.cross[j].empty()) {
+            const double other = theta_of(partner_[j]);
+            r -= pt.cross[j][c] * th * other;
+            slope += pt.cross[j][c] * other;
+          }
+          sj[i] += pt.p[c] * slope / pt.v[c];
+        }
+        s0 += pt.p[c] * pt.p[c] / pt.v[c];
+        s1 += pt.p[c] * r / pt.v[c];
+      }
+    if (!(s0 > 0)) continue;
+    const double mean = s1 / s0;
+    double var = scale * scale / s0;
+    for (std::size_t i = 0; i < fit.index.size(); ++i) {
+      if (names_[fit.index[i]].kind == "sample") continue;
+      var += std::pow(fit.u[i] * sj[i] / s0, 2);
+    }
+    const double u = std::sqrt(var);
+    const auto bd = decide(mean, u, tolerance_, k_);
+    if ((static_cast<int>(bd) > static_cast<int>(out.decision) || std::abs(mean) > std::abs(out.worst_rel)) &&
+        static_cast<int>(bd) >= static_cast<int>(out.decision)) {
+      out.worst_rel = mean;
+      out.worst_u = u;
+    }
+    out.decision = worse(out.decision, bd);
+  }
+  return out;
+}
+
+// The effect of a sample parameter's fitted change on β, judged point by point.
+Decision ScanEvidence::effect_decision(const Fitted& c, std::size_t& out_points) const {
+  const auto cause = cause_of(c);
+  const double delta = cause.value - cause.nominal;
+  Decision d = Decision::agrees;
+  out_points = 0;
+  for (const auto& pt : points_) {
+    Decision pd = Decision::agrees;
+    for (std::size_t ch = 0; ch < channels_; ++ch) {
+      const double s = pt.columns[c.column][ch];
+      pd = worse(pd, decide(s * delta, std::abs(s) * cause.u, tolerance_ * std::abs(pt.p[ch]), k_));
+    }
+    if (pd == Decision::out_of_tolerance) ++out_points;
+    d = worse(d, pd);
+  }
+  return d;
+}
+
+std::string ScanEvidence::tolerance_text() const {
+  return fmt::format("±{:g} % (k = {:g})", 100 * tolerance_, k_);
+}
+
+namespace {
+std::string in_words(Decision d) {
+  return d == Decision::agrees ? "within tolerance" : d == Decision::out_of_tolerance ? "out of tolerance" : "not decided";
+}
+}  // namespace
+
+// A candidate's own decision (for the named cause and for ties), and the sentence that says why.
+std::string ScanEvidence::decide_for(const Fitted& c, std::string& text) const {
+  const auto cause = cause_of(c);
+  if (cause.kind == "instrument") {
+    const auto& col = names_[c.column];
+    const double off = std::abs(cause.value - cause.nominal);
+    if (off - k_ * cause.u > col.limit) {
+      text = fmt::format("the instrument is outside its datasheet: {} (stated ±{:.3g}{})", describe(cause),
+                         col.limit, col.unit == "deg" ? "°" : "");
+      return "instrument_out_of_spec";
+    }
+    const auto b = band_decision(c.fit);
+    text = fmt::format("{} within the datasheet explains the points; with it removed the sample is {} "
+                       "(worst band {:+.2f} ± {:.2f} %, tolerance {})",
+                       describe(cause), in_words(b.decision), 100 * b.worst_rel, 100 * b.worst_u, tolerance_text());
+    return decision_text(b.decision);
+  }
+  std::size_t out_points = 0;
+  const auto d = effect_decision(c, out_points);
+  text = fmt::format("the sample differs from its catalogue: {}; {}", describe(cause),
+                     d == Decision::out_of_tolerance
+                         ? fmt::format("beyond the tolerance {} at {} of {} points", tolerance_text(), out_points,
+                                       points_.size())
+                     : d == Decision::agrees ? fmt::format("within the tolerance {} at every point", tolerance_text())
+                                             : fmt::format("not decidable against the tolerance {}", tolerance_text()));
+  return decision_text(d);
+}
+
+// H0 (the instrument's inputs held to their data sheets) against one candidate cause at a
+// time; the best, if it stands out by kSignificant and no other is within kTie of it, is
+// named, and its decision is the scan's. Otherwise the scan is judged per band under H0.
 ScanVerdict ScanEvidence::verdict() const {
   ScanVerdict v;
   v.points_used = points_.size();
@@ -360,168 +507,20 @@ ScanVerdict ScanEvidence::verdict() const {
   std::vector<std::size_t> instrument, sample;
   for (std::size_t j = 0; j < names_.size(); ++j) (names_[j].kind == "sample" ? sample : instrument).push_back(j);
   const auto h0 = solve(instrument, {});
-  struct Candidate {
-    std::size_t column;
-    Fit fit;
-  };
-  std::vector<Candidate> cands;
-  // The instrument's candidate causes are its arms and its white; the apertures stay
-  // nuisance inputs held to their data sheet (a few percent of an aperture moves β little
-  // and alike everywhere, so a free aperture would soak up whatever else is left).
-  for (auto j : instrument)
-    if (is_candidate(j)) cands.push_back({j, solve(instrument, {j})});
-  for (auto k : sample) {
-    auto cols = instrument;
-    cols.push_back(k);
-    cands.push_back({k, solve(cols, {k})});
-  }
-  // Extrapolations of the linear model are no evidence (see max_change).
-  std::erase_if(cands, [&](const Candidate& c) {
-    const auto pos = static_cast<std::size_t>(std::find(c.fit.index.begin(), c.fit.index.end(), c.column) -
-                                              c.fit.index.begin());
-    return pos >= c.fit.theta.size() || !(std::abs(c.fit.theta[pos]) <= names_[c.column].max_change);
-  });
-  // Too few points for a cause: only the per-band test below.
-  if (points_.size() < needed) cands.clear();
-  std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.fit.chi2 < b.fit.chi2; });
-  const auto dof = [&](std::size_t free) { return static_cast<double>(std::max<std::size_t>(1, n_ - free)); };
-
-  // The cause a candidate names: its free parameter's value and u (scaled by √(χ²/dof) when
-  // the fit is worse than its uncertainties say).
-  const auto cause_of = [&](const Candidate& c) {
-    const auto& col = names_[c.column];
-    const auto pos = static_cast<std::size_t>(
-        std::find(c.fit.index.begin(), c.fit.index.end(), c.column) - c.fit.index.begin());
-    const double scale = std::sqrt(std::max(1.0, c.fit.chi2 / dof(1)));
-    return VerdictCause{col.kind, col.name, col.nominal + c.fit.theta[pos], c.fit.u[pos] * scale, col.nominal};
-  };
-
-  // The per-band mean relative difference left by `fit` (its instrument inputs removed), with
-  // its uncertainty: the points' own and the instrument's systematic inputs' (posterior).
-  const auto band_decision = [&](const Fit& fit, double& worst_rel, double& worst_u) {
-    const std::size_t bands = std::min<std::size_t>(3, channels_);
-    Decision d = Decision::agrees;
-    worst_rel = 0;
-    worst_u = 0;
-    const double scale = std::sqrt(std::max(1.0, fit.chi2 / dof(fit.free.size())));
-    for (std::size_t band = 0; band < bands; ++band) {
-      const std::size_t lo = band * channels_ / bands, hi = (band + 1) * channels_ / bands;
-      double s0 = 0, s1 = 0;
-      std::vector<double> sj(fit.index.size(), 0.0);
-      for (const auto& pt : points_)
-        for (std::size_t c = lo; c < hi; ++c) {
-          if (!(pt.v[c] > 0) || pt.p[c] == 0) continue;
-          // The residual with the fitted instrument inputs' effect removed.
-          double r = pt.r[c];
-          const auto theta_of = [&](std::size_t column) {
-            const auto it = std::find(fit.index.begin(), fit.index.end(), column);
-            return it == fit.index.end() ? 0.0 : fit.theta[static_cast<std::size_t>(it - fit.index.begin())];
-          };
-          for (std::size_t i = 0; i < fit.index.size(); ++i) {
-            const auto j = fit.index[i];
-            if (names_[j].kind == "sample") continue;
-            const double th = fit.theta[i];
-            const double c2 = pt.curvature[j].empty() ? 0.0 : pt.curvature[j][c];
-            double slope = pt.columns[j][c] + c2 * th;
-            r -= pt.columns[j][c] * th + 0.5 * c2 * th * th;
-            if (!pt.cross[j].empty()) {
-              const double other = theta_of(partner_[j]);
-              r -= pt.cross[j][c] * th * other;
-              slope += pt.cross[j][c] * other;
-            }
-            sj[i] += pt.p[c] * slope / pt.v[c];
-          }
-          s0 += pt.p[c] * pt.p[c] / pt.v[c];
-          s1 += pt.p[c] * r / pt.v[c];
-        }
-      if (!(s0 > 0)) continue;
-      const double mean = s1 / s0;
-      double var = scale * scale / s0;
-      for (std::size_t i = 0; i < fit.index.size(); ++i) {
-        if (names_[fit.index[i]].kind == "sample") continue;
-        var += std::pow(fit.u[i] * sj[i] / s0, 2);
-      }
-      const double u = std::sqrt(var);
-      const auto bd = decide(mean, u, tolerance_, k_);
-      if (static_cast<int>(bd) > static_cast<int>(d) || std::abs(mean) > std::abs(worst_rel)) {
-        if (static_cast<int>(bd) >= static_cast<int>(d)) {
-          worst_rel = mean;
-          worst_u = u;
-        }
-      }
-      d = worse(d, bd);
-    }
-    return d;
-  };
-
-  // The effect of a sample parameter's fitted change on β, judged point by point.
-  const auto effect_decision = [&](const Candidate& c, std::size_t& out_points) {
-    const auto cause = cause_of(c);
-    const double delta = cause.value - cause.nominal;
-    Decision d = Decision::agrees;
-    out_points = 0;
-    for (const auto& pt : points_) {
-      Decision pd = Decision::agrees;
-      for (std::size_t ch = 0; ch < channels_; ++ch) {
-        const double s = pt.columns[c.column][ch];
-        pd = worse(pd, decide(s * delta, std::abs(s) * cause.u, tolerance_ * std::abs(pt.p[ch]), k_));
-      }
-      if (pd == Decision::out_of_tolerance) ++out_points;
-      d = worse(d, pd);
-    }
-    return d;
-  };
-
+  // Too few points for a cause: only the per-band test.
+  const auto cands = points_.size() < needed ? std::vector<Fitted>{} : fit_candidates(instrument, sample);
   for (const auto& c : cands) v.candidates.push_back({cause_of(c), h0.chi2 - c.fit.chi2});
   // Evidence: a candidate that lowers χ² by kSignificant. (H0 holds each rectangular input
   // within its stated limit, so an arm truly beyond it cannot hide in H0's prior.)
   const bool significant = !cands.empty() && std::isfinite(cands.front().fit.chi2) &&
                            h0.chi2 - cands.front().fit.chi2 > kSignificant;
-  const auto tolerance_text = fmt::format("±{:g} % (k = {:g})", 100 * tolerance_, k_);
-  std::vector<const Candidate*> tied;
-  if (significant) {
-    for (std::size_t i = 1; i < cands.size(); ++i)
-      if (cands[i].fit.chi2 - cands.front().fit.chi2 < kTie) tied.push_back(&cands[i]);
-    v.delta_chi2_next = cands.size() > 1 ? cands[1].fit.chi2 - cands.front().fit.chi2 : 0;
-  }
-
-  // A candidate's own decision (used for the named cause and for ties).
-  const auto decide_for = [&](const Candidate& c, std::string& text) -> std::string {
-    const auto cause = cause_of(c);
-    if (cause.kind == "instrument") {
-      const auto& col = names_[c.column];
-      const double off = std::abs(cause.value - cause.nominal);
-      if (off - k_ * cause.u > col.limit) {
-        text = fmt::format("the instrument is outside its datasheet: {} (stated ±{:.3g}{})", describe(cause),
-                           col.limit, col.unit == "deg" ? "°" : "");
-        return "instrument_out_of_spec";
-      }
-      double rel = 0, u = 0;
-      const auto d = band_decision(c.fit, rel, u);
-      text = fmt::format("{} within the datasheet explains the points; with it removed the sample is {} "
-                         "(worst band {:+.2f} ± {:.2f} %, tolerance {})",
-                         describe(cause), d == Decision::agrees ? "within tolerance" : d == Decision::out_of_tolerance ? "out of tolerance" : "not decided", 100 * rel, 100 * u,
-                         tolerance_text);
-      return decision_text(d);
-    }
-    std::size_t out_points = 0;
-    const auto d = effect_decision(c, out_points);
-    text = fmt::format("the sample differs from its catalogue: {}; {}", describe(cause),
-                       d == Decision::out_of_tolerance
-                           ? fmt::format("beyond the tolerance {} at {} of {} points", tolerance_text, out_points, points_.size())
-                       : d == Decision::agrees ? fmt::format("within the tolerance {} at every point", tolerance_text)
-                                               : fmt::format("not decidable against the tolerance {}", tolerance_text));
-    return decision_text(d);
-  };
-
   if (!significant) {
-    double rel = 0, u = 0;
-    const auto d = band_decision(h0, rel, u);
-    v.decision = decision_text(d);
+    const auto b = band_decision(h0);
+    v.decision = decision_text(b.decision);
     v.chi2_per_dof = h0.chi2 / dof(0);
     v.summary = fmt::format("{} over {} points: the worst band differs by {:+.2f} ± {:.2f} % (tolerance {}); {} (χ²/dof {:.3g})",
-                            d == Decision::agrees ? "agrees" : d == Decision::out_of_tolerance ? "out of tolerance" : "undecided",
-                            points_.size(), 100 * rel, 100 * u, tolerance_text,
+                            b.decision == Decision::agrees ? "agrees" : b.decision == Decision::out_of_tolerance ? "out of tolerance" : "undecided",
+                            points_.size(), 100 * b.worst_rel, 100 * b.worst_u, tolerance_text(),
                             points_.size() < needed
                                 ? fmt::format("the cause is undetermined until {} points are in", needed)
                                 : std::string("no candidate cause stands out"),
@@ -529,9 +528,13 @@ ScanVerdict ScanEvidence::verdict() const {
     return v;
   }
   const auto& best = cands.front();
+  v.delta_chi2_next = cands.size() > 1 ? cands[1].fit.chi2 - best.fit.chi2 : 0;
   v.chi2_per_dof = best.fit.chi2 / dof(1);
   std::string text;
   v.decision = decide_for(best, text);
+  std::vector<const Fitted*> tied;
+  for (std::size_t i = 1; i < cands.size(); ++i)
+    if (cands[i].fit.chi2 - best.fit.chi2 < kTie) tied.push_back(&cands[i]);
   if (!tied.empty()) {
     // The points cannot tell these apart: no cause is named.
     std::string names = describe(cause_of(best));

@@ -30,6 +30,7 @@
 // cause; fewer than three: undecided.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -37,6 +38,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "gonio/daemon/instrument/divergence.hpp"
 #include "gonio/proto/point.hpp"
 
 namespace gonio::daemon {
@@ -106,8 +108,28 @@ class ScanEvidence {
     std::vector<double> theta, u;   // over all columns in the fit
     std::vector<std::size_t> index;
   };
+  // A candidate cause: one column set free, the rest held to their priors.
+  struct Fitted {
+    std::size_t column;
+    Fit fit;
+  };
+  struct BandResult {
+    Decision decision = Decision::agrees;
+    double worst_rel = 0, worst_u = 0;  // the worst band's mean relative difference and u
+  };
   Fit solve(const std::vector<std::size_t>& columns, const std::vector<std::size_t>& free) const;
   bool is_candidate(std::size_t column) const;
+  // The steps of verdict(): each candidate fitted (within its linear range, best first), the
+  // cause it names, what is left per band once its instrument inputs are removed, a sample
+  // parameter's effect point by point, and the decision a candidate leads to.
+  std::vector<Fitted> fit_candidates(const std::vector<std::size_t>& instrument,
+                                     const std::vector<std::size_t>& sample) const;
+  double dof(std::size_t free) const { return static_cast<double>(std::max<std::size_t>(1, n_ - free)); }
+  VerdictCause cause_of(const Fitted& c) const;
+  BandResult band_decision(const Fit& fit) const;
+  Decision effect_decision(const Fitted& c, std::size_t& out_points) const;
+  std::string decide_for(const Fitted& c, std::string& text) const;
+  std::string tolerance_text() const;
   void setup(const PointRecord& p);
 
   double tolerance_, k_;
