@@ -446,6 +446,7 @@ json measure_throughput(Client& admin, const Options& o, const std::string& uri,
                        {{"system.info", json::object()},
                         {"scan.points", json{{"scan", scan}, {"offset", 0}, {"limit", 10}}}});
   const double loaded = (done() - a) / r.seconds;
+  const auto governor_loaded = admin.call("system.info")["governor"];
   results.push_back(std::move(r));
   const double idle2 = idle_rate();
   const auto state = admin.call("scan.get", json{{"scan", scan}})["state"].get<std::string>();
@@ -453,7 +454,8 @@ json measure_throughput(Client& admin, const Options& o, const std::string& uri,
     throw std::runtime_error("the scan ended (" + state + ") before the throughput was measured: lower --seconds");
   const double idle = 0.5 * (idle1 + idle2);
   return json{{"idle_points_per_s", idle}, {"idle_first", idle1}, {"idle_last", idle2},
-              {"loaded_points_per_s", loaded}, {"loaded_over_idle", idle > 0 ? loaded / idle : 0}};
+              {"loaded_points_per_s", loaded}, {"loaded_over_idle", idle > 0 ? loaded / idle : 0},
+              {"governor", governor_loaded}};
 }
 
 // scan.pause of a queued scan while 32 viewers hammer scan.export: its latency.
@@ -578,9 +580,10 @@ void print(const Report& rep, const Options& o) {
   if (const auto& tp = rep.throughput; !tp.is_null())
     std::cout << fmt::format(
         "throughput: the scan measured {:.1f} points/s idle ({:.1f} before, {:.1f} after) and {:.1f} "
-        "under {} clients: {:.0f} % of idle\n",
+        "under {} clients: {:.0f} % of idle; governor {}\n",
         tp["idle_points_per_s"].get<double>(), tp["idle_first"].get<double>(), tp["idle_last"].get<double>(),
-        tp["loaded_points_per_s"].get<double>(), o.clients, 100 * tp["loaded_over_idle"].get<double>());
+        tp["loaded_points_per_s"].get<double>(), o.clients, 100 * tp["loaded_over_idle"].get<double>(),
+        tp["governor"].dump());
   if (const auto& h = rep.hostile; !h.empty()) {
     const auto& ctl = h["control"];
     std::cout << fmt::format(

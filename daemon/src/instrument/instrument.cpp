@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "gonio/daemon/rpc/governor.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/text.hpp"
 #include "gonio/registry/registry.hpp"
@@ -373,6 +374,7 @@ std::optional<std::int64_t> Instrument::running_scan() const {
 }
 
 void Instrument::loop() {
+  rpc::mark_measurement_thread();  // the runner comes before client work (rpc/governor.hpp)
   for (;;) {
     beat();
     std::unique_lock lock(mu_);

@@ -120,6 +120,7 @@ void register_system(MethodRegistrar& reg, Services& s) {
     if (s.archive) (out += R"(,"archive":)") += s.archive->status().dump();
     if (s.transport_stats) (out += R"(,"transport":)") += s.transport_stats().dump();
     if (s.net_stats) (out += R"(,"net":)") += s.net_stats().dump();
+    if (s.governor_stats) (out += R"(,"governor":)") += s.governor_stats().dump();
     out += '}';
     return rpc::RawJson{std::move(out)};
   });

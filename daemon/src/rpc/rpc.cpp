@@ -442,7 +442,7 @@ void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
     invoke(method, Call{session, std::move(who), name, params}, finish);
   };
   if (method.control && control_) control_(std::move(run));
-  else if (method.blocking && blocking_) blocking_(std::move(run));
+  else if ((method.blocking || (inline_gate_ && inline_gate_())) && blocking_) blocking_(std::move(run));
   else run();
 }
 

@@ -37,6 +37,7 @@
 #include "gonio/daemon/methods/methods.hpp"
 #include "gonio/daemon/net/net.hpp"
 #include "gonio/daemon/rpc/auth.hpp"
+#include "gonio/daemon/rpc/governor.hpp"
 #include "gonio/daemon/rpc/hub.hpp"
 #include "gonio/daemon/rpc/rpc.hpp"
 #include "gonio/daemon/store/store.hpp"
@@ -177,6 +178,7 @@ void yield_to_measurement() {
   thread_local bool lowered = false;
   if (lowered) return;
   lowered = true;
+  rpc::mark_client_thread();
   const auto tid = static_cast<id_t>(::gettid());
   errno = 0;
   const int now = ::getpriority(PRIO_PROCESS, tid);
@@ -484,19 +486,23 @@ int run_daemon(const DaemonOptions& o) {
     start_telemetry(telemetry, config, hub);
 
     asio::io_context io;
+    // Declared before the pools that wait on it, so that it outlives them.
+    rpc::ClientGovernor governor({.busy_share = config.client_share_busy});
     asio::thread_pool workers(config.rpc_threads);
     // Control methods (pause, resume, cancel, reset) have threads of their own: a queue of
     // exports on the workers cannot delay them.
     asio::thread_pool control(2);
-    rpc::Dispatcher dispatcher([&workers](std::function<void()> f) {
-                                 asio::post(workers, [f = std::move(f)] {
+    rpc::Dispatcher dispatcher([&workers, &governor](std::function<void()> f) {
+                                 asio::post(workers, [&governor, f = std::move(f)] {
                                    yield_to_measurement();
+                                   governor.wait_turn();
                                    f();
                                  });
                                },
                                [&control](std::function<void()> f) { asio::post(control, std::move(f)); },
                                dispatch_limits(config));
     dispatcher.set_principal_check([&auth](const Principal& p) { return auth.still_valid(p); });
+    dispatcher.set_inline_gate([&governor] { return governor.holding(); });
 
     net::NetStats net_stats;
     std::vector<std::shared_ptr<net::Listener>> listeners;
@@ -515,6 +521,7 @@ int run_daemon(const DaemonOptions& o) {
                       config.twin_data_dir.empty() ? state / "data" : fs::path(config.twin_data_dir),
                       telemetry.archive.get(),
                       telemetry.mqtt.get()};
+    services.governor_stats = [&governor] { return governor.stats(); };
     register_methods(dispatcher, services);
 
     const net::Context ctx{dispatcher, hub, auth, net::Limits::from(config), net_stats, load_dashboard(config)};
@@ -566,6 +573,7 @@ int run_daemon(const DaemonOptions& o) {
     stop.join();
     instrument.shutdown();
     control.join();
+    governor.stop();  // client work it holds runs now, and the workers can finish
     workers.join();
     alerts.set_sink(nullptr);
     hub.set_tap(nullptr);

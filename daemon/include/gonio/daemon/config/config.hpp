@@ -119,6 +119,9 @@ struct Config {
   std::string served_web_root(std::string_view exe) const;
   std::size_t max_connections = 512;
   std::size_t rpc_threads = 2;        // workers for blocking methods
+  // Client work's CPU, in cores, while the measurement waits for a core (rpc/governor.hpp);
+  // 0: not governed.
+  double client_share_busy = 0.05;
   std::string log_level = "info";
 
   // [auth]

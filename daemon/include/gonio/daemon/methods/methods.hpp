@@ -44,6 +44,7 @@ struct Services {
   std::filesystem::path data_dir;  // where BSDF specs' '@file' names may point (twin.data_dir)
   ArchiveShipper* archive = nullptr;  // null: no [archive]
   MqttPublisher* mqtt = nullptr;      // null: no [mqtt]
+  std::function<nlohmann::json()> governor_stats;  // the client governor (rpc/governor.hpp)
 };
 
 void register_methods(rpc::Dispatcher& d, Services& s);

@@ -159,6 +159,9 @@ class Dispatcher {
   // Asked before every call made with a token's role: false when the token has been revoked
   // since the session logged in (the session then falls back to no role).
   void set_principal_check(std::function<bool(const Principal&)> check) { check_ = std::move(check); }
+  // Asked before a method that would run on the calling (network) thread: true sends it to
+  // the blocking executor instead (the client governor is holding client work there).
+  void set_inline_gate(std::function<bool()> gate) { inline_gate_ = std::move(gate); }
 
   // Counters for system.info.
   std::uint64_t requests() const noexcept { return requests_.load(); }
@@ -174,6 +177,7 @@ class Dispatcher {
   Executor blocking_, control_;
   DispatchLimits limits_;
   std::function<bool(const Principal&)> check_;
+  std::function<bool()> inline_gate_;
   std::map<std::string, Method, std::less<>> methods_;
   mutable std::atomic<std::uint64_t> requests_{0}, errors_{0};
 };
