@@ -349,12 +349,13 @@ struct Options {
   std::size_t clients = 64;
   double seconds = 5, time_scale = 1;
   bool as_json = false, hostile = false, throughput = false;
+  std::optional<double> client_share;  // server.client_share_busy of the goniod it starts
 };
 
 // goniod --mock in a fresh state directory with a TCP listener, stopped and removed at the end.
 class Goniod {
  public:
-  Goniod(std::string exe, double time_scale) {
+  Goniod(std::string exe, double time_scale, std::optional<double> client_share) {
     std::string tmpl = (fs::temp_directory_path() / "gonio-load-XXXXXX").string();
     if (!::mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed");
     dir_ = tmpl;
@@ -362,6 +363,7 @@ class Goniod {
     {
       std::ofstream cfg(dir_ / "load.toml");
       cfg << "[server]\nlog_level = \"warn\"\nlisten = [\"tcp://127.0.0.1:0\"]\n"
+          << (client_share ? fmt::format("client_share_busy = {}\n", *client_share) : std::string())
           << "max_connections = 4096\n\n[instrument.motion]\ndriver = \"mock\"\n"
           << fmt::format("sample = \"{}\"\ntime_scale = {}\n\n", gonio::daemon::kDemoSampleBsdf, time_scale)
           << "[instrument.photometer]\ndriver = \"mock\"\n";
@@ -415,10 +417,11 @@ class Goniod {
 // A sample and a scan long enough to outlast every phase, running with points to page
 // through (with --throughput, at time scale 0).
 std::int64_t start_scan(Client& admin, bool throughput) {
-  admin.call("sample.create", json{{"name", "load"}, {"bsdf", gonio::daemon::kDemoSampleBsdf}});
+  if (admin.call("sample.list").empty())
+    admin.call("sample.create", json{{"name", "load"}, {"bsdf", gonio::daemon::kDemoSampleBsdf}});
   const auto s = admin.call("scan.submit", json{{"sample", "load"},
                                                {"grids", {throughput ? "in=15,30,45,60;out=-5:80:0.5" : "in=15,30,45,60;out=-5:80:1"}},
-                                               {"repeats", throughput ? 40 : 2}});
+                                               {"repeats", throughput ? 100 : 2}});
   const auto scan = s["id"].get<std::int64_t>();
   for (int i = 0; i < 600; ++i) {
     const auto sc = admin.call("scan.get", json{{"scan", scan}});
@@ -428,34 +431,53 @@ std::int64_t start_scan(Client& admin, bool throughput) {
   return scan;
 }
 
-// The runner's throughput: points per second of the running scan with no client, then with
-// the clients split between system.info and scan.points, then idle again (the mean of the
-// two idle rates is the reference; a drift between them is reported).
+// The runner's throughput: points per second of the running scan with no client, and with
+// the clients split between system.info and scan.points, in four alternating rounds of each
+// (a scan's points differ in cost along the scan: alternating compares like with like). The
+// first and last idle rounds are reported too (their difference says how steady it was).
 json measure_throughput(Client& admin, const Options& o, const std::string& uri, const std::string& token,
-                        std::int64_t scan, std::vector<Result>& results) {
+                        std::int64_t first, std::vector<Result>& results) {
+  // A scan of its own, so that the phases before have not used it up.
+  if (admin.call("scan.get", json{{"scan", first}})["state"] == "running") admin.call("scan.cancel", json{{"scan", first}});
+  const auto scan = start_scan(admin, true);
+  constexpr int kRounds = 4;
+  const double round_s = o.seconds / kRounds;
   const auto done = [&] { return admin.call("scan.get", json{{"scan", scan}})["points_done"].get<double>(); };
-  const auto idle_rate = [&] {
-    const double a = done();
-    const auto t0 = Clock::now();
-    std::this_thread::sleep_for(std::chrono::duration<double>(o.seconds));
-    return (done() - a) / std::chrono::duration<double>(Clock::now() - t0).count();
-  };
-  const double idle1 = idle_rate();
-  const double a = done();
-  auto r = run_clients("system.info + scan.points", uri, token, o.clients, o.seconds,
-                       {{"system.info", json::object()},
-                        {"scan.points", json{{"scan", scan}, {"offset", 0}, {"limit", 10}}}});
-  const double loaded = (done() - a) / r.seconds;
-  const auto governor_loaded = admin.call("system.info")["governor"];
-  results.push_back(std::move(r));
-  const double idle2 = idle_rate();
+  double idle_points = 0, idle_s = 0, loaded_points = 0, loaded_s = 0, idle_first = 0, idle_last = 0;
+  Result all;
+  all.target = "system.info + scan.points";
+  all.clients = o.clients;
+  json governor;
+  for (int round = 0; round < kRounds; ++round) {
+    double a = done();
+    auto t0 = Clock::now();
+    std::this_thread::sleep_for(std::chrono::duration<double>(round_s));
+    const double secs = std::chrono::duration<double>(Clock::now() - t0).count();
+    const double pts = done() - a;
+    idle_points += pts;
+    idle_s += secs;
+    (round == 0 ? idle_first : idle_last) = pts / secs;
+    a = done();
+    auto r = run_clients("system.info + scan.points", uri, token, o.clients, round_s,
+                         {{"system.info", json::object()},
+                          {"scan.points", json{{"scan", scan}, {"offset", 0}, {"limit", 10}}}});
+    loaded_points += done() - a;
+    loaded_s += r.seconds;
+    if (round == kRounds - 1) governor = admin.call("system.info")["governor"];
+    all.latency_ms.insert(all.latency_ms.end(), r.latency_ms.begin(), r.latency_ms.end());
+    all.requests += r.requests;
+    all.errors += r.errors;
+    all.seconds += r.seconds;
+  }
+  std::sort(all.latency_ms.begin(), all.latency_ms.end());
+  results.push_back(std::move(all));
   const auto state = admin.call("scan.get", json{{"scan", scan}})["state"].get<std::string>();
   if (state != "running")
     throw std::runtime_error("the scan ended (" + state + ") before the throughput was measured: lower --seconds");
-  const double idle = 0.5 * (idle1 + idle2);
-  return json{{"idle_points_per_s", idle}, {"idle_first", idle1}, {"idle_last", idle2},
+  const double idle = idle_points / idle_s, loaded = loaded_points / loaded_s;
+  return json{{"idle_points_per_s", idle}, {"idle_first", idle_first}, {"idle_last", idle_last},
               {"loaded_points_per_s", loaded}, {"loaded_over_idle", idle > 0 ? loaded / idle : 0},
-              {"governor", governor_loaded}};
+              {"governor", governor}};
 }
 
 // scan.pause of a queued scan while 32 viewers hammer scan.export: its latency.
@@ -579,7 +601,7 @@ void print(const Report& rep, const Options& o) {
       gonio::daemon::cell(runner["overhead_ms_max"]), gonio::daemon::cell(runner["overhead_window"]));
   if (const auto& tp = rep.throughput; !tp.is_null())
     std::cout << fmt::format(
-        "throughput: the scan measured {:.1f} points/s idle ({:.1f} before, {:.1f} after) and {:.1f} "
+        "throughput: the scan measured {:.1f} points/s idle (first round {:.1f}, last {:.1f}) and {:.1f} "
         "under {} clients: {:.0f} % of idle; governor {}\n",
         tp["idle_points_per_s"].get<double>(), tp["idle_first"].get<double>(), tp["idle_last"].get<double>(),
         tp["loaded_points_per_s"].get<double>(), o.clients, 100 * tp["loaded_over_idle"].get<double>(),
@@ -602,7 +624,7 @@ void run(Options o) {
   std::optional<Goniod> own;
   std::string uri = o.connect, token = o.token;
   if (uri.empty()) {
-    own.emplace(o.goniod, o.time_scale);
+    own.emplace(o.goniod, o.time_scale, o.client_share);
     uri = own->uri();
     token = own->token();
   } else if (token.empty() && !o.token_file.empty()) {
@@ -613,7 +635,7 @@ void run(Options o) {
   if (!token.empty()) admin.login(token);
   Report rep;
   if (own) {
-    rep.scan_id = start_scan(admin, o.throughput);
+    rep.scan_id = start_scan(admin, false);
   } else {
     const auto list = admin.call("scan.list", json{{"limit", 1}});
     if (!list.empty()) rep.scan_id = list[0]["id"].get<std::int64_t>();
@@ -647,6 +669,9 @@ int main(int argc, char** argv) {
   app.add_option("--seconds", o.seconds, "duration of each target")->check(CLI::Range(0.2, 3600.0));
   app.add_option("--time-scale", o.time_scale, "the mock's real-time factor (keeps the scan running)");
   app.add_flag("--json", o.as_json, "print the figures as JSON");
+  app.add_option("--client-share", o.client_share,
+                 "server.client_share_busy of the goniod it starts (0: no client governor)")
+      ->check(CLI::Range(0.0, 64.0));
   app.add_option("--client-nice", g_client_nice,
                  "run the client threads this much nicer (0–19): clients on another machine take "
                  "no CPU from goniod")

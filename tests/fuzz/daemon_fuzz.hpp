@@ -67,7 +67,7 @@ struct FuzzDaemon {
     instrument->shutdown();
     services.emplace(daemon::Services{config, dir, *store, *auth, hub, *twin, *alerts, *instrument,
                                       &dispatcher, std::chrono::steady_clock::now(), utc::now(),
-                                      nullptr, nullptr, nullptr, dir, nullptr, nullptr});
+                                      nullptr, nullptr, nullptr, dir, nullptr, nullptr, nullptr});
     daemon::register_methods(dispatcher, *services);
     std::atexit([] { std::filesystem::remove_all(get().dir); });
   }

@@ -287,8 +287,8 @@ void server_keys(std::vector<ConfigKey>& k) {
   k.push_back(integer("server", "rpc_threads", field(&C::rpc_threads), 1, 64,
                       "workers for blocking methods (instrument, twin, export)"));
   k.push_back(number("server", "client_share_busy", field(&C::client_share_busy), 0, 64,
-                     "cores' worth of CPU for client requests while the scan runner or the twin "
-                     "waits for a core (0: not governed); control methods are never held"));
+                     "cores' worth of CPU for client requests while the scan runner waits for a "
+                     "core (0: not governed); control methods are never held"));
   k.push_back(integer("server", "max_message_bytes", field(&C::max_message_bytes), 1024, 64ll << 20,
                       "largest message (line, HTTP body, WebSocket message)"));
   k.push_back(seconds("server", "read_timeout_s", field(&C::read_timeout), 0.1, 3600,

@@ -55,6 +55,9 @@ std::string adaptive_summary(const twin::DesignStatus& st, const ScanPlan& plan)
   return s;
 }
 
+// Points of a scan judged one by one before the verdict is judged less often (see step 7).
+constexpr std::size_t kJudgeEvery = 256;
+
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
@@ -645,7 +648,14 @@ void Instrument::publish_point(const PointRecord& p, const std::string& text, st
   }
   if (p.predicted) {
     r.evidence.add(p);
-    judge_scan(p.index, false);
+    // Judged after every point up to kJudgeEvery points, then after every n/kJudgeEvery-th:
+    // a verdict's cost grows with the points (its per-point effects), so a long scan would
+    // otherwise slow as it goes; the last point is always judged.
+    const auto n = r.evidence.points();
+    if (n <= kJudgeEvery || ++r.since_judged * kJudgeEvery >= n) {
+      r.since_judged = 0;
+      judge_scan(p.index, false);
+    }
   }
   if (r.adaptive) {
     r.adaptive->committed(gi, p);

@@ -57,6 +57,7 @@ struct Instrument::Run {
   std::string verdict_stored;     // decision and cause of the verdict last stored
   double busy_seconds = 0;  // wall time of the points of this run (for the ETA)
   bool sustained_raised = false;
+  std::size_t since_judged = 0;  // points since the verdict was last judged
 };
 
 }  // namespace gonio::daemon

@@ -6,7 +6,6 @@
 
 #include <fmt/format.h>
 
-#include "gonio/daemon/rpc/governor.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/text.hpp"
 #include "gonio/twin/bsdf.hpp"
@@ -94,7 +93,6 @@ void TwinService::post(std::function<void()> task) {
 }
 
 void TwinService::work() {
-  rpc::mark_measurement_thread();  // the twin's predictions come before client work
   for (;;) {
     std::function<void()> task;
     {

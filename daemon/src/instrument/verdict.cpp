@@ -138,6 +138,12 @@ void ScanEvidence::setup(const PointRecord& p) {
   }
   residual_ = e++;
   G_.assign(e, std::vector<double>(e, 0.0));
+  const std::size_t bands = std::min<std::size_t>(3, channels_);
+  bands_.assign(bands, BandMoments{0, 0, std::vector<double>(n, 0.0), std::vector<double>(n, 0.0),
+                                   std::vector<double>(n, 0.0)});
+  band_of_.assign(channels_, 0);
+  for (std::size_t b = 0; b < bands; ++b)
+    for (std::size_t c = b * channels_ / bands; c < (b + 1) * channels_ / bands; ++c) band_of_[c] = b;
 }
 
 void ScanEvidence::add(const PointRecord& rec) {
@@ -193,6 +199,16 @@ void ScanEvidence::add(const PointRecord& rec) {
         G_[j][i] = G_[i][j];
       }
     ++n_;
+    const double pv = q.values[c] * w;
+    if (pv == 0 || bands_.empty()) continue;
+    auto& band = bands_[band_of_[c]];
+    band.pp += pv * q.values[c];
+    band.pr += pv * r;
+    for (std::size_t j = 0; j < names_.size(); ++j) {
+      band.ps[j] += pv * pt.columns[j][c];
+      if (!pt.curvature[j].empty()) band.pc2[j] += pv * pt.curvature[j][c];
+      if (!pt.cross[j].empty()) band.px[j] += pv * pt.cross[j][c];
+    }
   }
   points_.push_back(std::move(pt));
 }
@@ -384,39 +400,26 @@ VerdictCause ScanEvidence::cause_of(const Fitted& c) const {
 // The per-band mean relative difference left by `fit` (its instrument inputs removed), with
 // its uncertainty: the points' own and the instrument's systematic inputs' (posterior).
 ScanEvidence::BandResult ScanEvidence::band_decision(const Fit& fit) const {
-  const std::size_t bands = std::min<std::size_t>(3, channels_);
   BandResult out;
   const double scale = std::sqrt(std::max(1.0, fit.chi2 / dof(fit.free.size())));
   const auto theta_of = [&](std::size_t column) {
     const auto it = std::find(fit.index.begin(), fit.index.end(), column);
     return it == fit.index.end() ? 0.0 : fit.theta[static_cast<std::size_t>(it - fit.index.begin())];
   };
-  for (std::size_t band = 0; band < bands; ++band) {
-    const std::size_t lo = band * channels_ / bands, hi = (band + 1) * channels_ / bands;
-    double s0 = 0, s1 = 0;
+  for (const auto& band : bands_) {
+    // Σ p·r'/v and Σ p·∂r'/∂θ_i /v of the residual r' with the fitted instrument inputs'
+    // effect removed (r' = r − s θ − ½ c₂ θ² − c×θ θ_partner), from the band's moments.
+    const double s0 = band.pp;
+    double s1 = band.pr;
     std::vector<double> sj(fit.index.size(), 0.0);
-    for (const auto& pt : points_)
-      for (std::size_t c = lo; c < hi; ++c) {
-        if (!(pt.v[c] > 0) || pt.p[c] == 0) continue;
-        // The residual with the fitted instrument inputs' effect removed.
-        double r = pt.r[c];
-        for (std::size_t i = 0; i < fit.index.size(); ++i) {
-          const auto j = fit.index[i];
-          if (names_[j].kind == "sample") continue;
-          const double th = fit.theta[i];
-          const double c2 = pt.curvature[j].empty() ? 0.0 : pt.curvature[j][c];
-          double slope = pt.columns[j][c] + c2 * th;
-          r -= pt.columns[j][c] * th + 0.5 * c2 * th * th;
-          if (!pt.cross[j].empty()) {
-            const double other = theta_of(partner_[j]);
-            r -= pt.cross[j][c] * th * other;
-            slope += pt.cross[j][c] * other;
-          }
-          sj[i] += pt.p[c] * slope / pt.v[c];
-        }
-        s0 += pt.p[c] * pt.p[c] / pt.v[c];
-        s1 += pt.p[c] * r / pt.v[c];
-      }
+    for (std::size_t i = 0; i < fit.index.size(); ++i) {
+      const auto j = fit.index[i];
+      if (names_[j].kind == "sample") continue;
+      const double th = fit.theta[i];
+      const double other = cross_of_[j] != std::string::npos ? theta_of(partner_[j]) : 0.0;
+      s1 -= band.ps[j] * th + 0.5 * band.pc2[j] * th * th + band.px[j] * th * other;
+      sj[i] = band.ps[j] + band.pc2[j] * th + band.px[j] * other;
+    }
     if (!(s0 > 0)) continue;
     const double mean = s1 / s0;
     double var = scale * scale / s0;

@@ -16,7 +16,7 @@ namespace gonio::daemon::rpc {
 
 namespace {
 
-enum class Kind { measurement, client };
+enum class Kind { measurement, client, network };
 
 struct Registry {
   std::mutex mu;
@@ -67,6 +67,7 @@ std::optional<ThreadTimes> thread_times(pid_t tid) {
 
 void mark_measurement_thread() { mark(Kind::measurement); }
 void mark_client_thread() { mark(Kind::client); }
+void mark_network_thread() { mark(Kind::network); }
 
 ClientGovernor::ClientGovernor(Settings s, bool sample) : settings_(s), last_(std::chrono::steady_clock::now()) {
   if (sample && settings_.busy_share > 0) sampler_ = std::thread([this] { sample_loop(); });
@@ -87,7 +88,10 @@ void ClientGovernor::wait_turn() {
   if (!holding()) return;
   std::unique_lock lock(mu_);
   // A negative balance is client CPU spent beyond the share: wait until the ticks repay it.
-  cv_.wait(lock, [&] { return stopping_ || !holding_.load() || balance_ns_ >= 0; });
+  // One request a tick goes ahead whatever the balance: the network threads' CPU, which is
+  // not all requests' (notifications follow the scan), must not stop requests altogether.
+  cv_.wait(lock, [&] { return stopping_ || !holding_.load() || balance_ns_ >= 0 || grant_; });
+  if (holding_.load() && balance_ns_ < 0) grant_ = false;
 }
 
 void ClientGovernor::observe(const Tick& t) {
@@ -96,9 +100,12 @@ void ClientGovernor::observe(const Tick& t) {
     ++tick_no_;
     client_total_ns_ += t.client_run_ns;
     measurement_wait_total_ns_ += t.measurement_wait_ns;
-    const bool slowed = t.elapsed_ns > 0 && t.client_run_ns > 0 &&
-                        static_cast<double>(t.measurement_wait_ns) >
-                            settings_.wait_threshold * static_cast<double>(t.elapsed_ns);
+    // Slowed beside clients that took more than their share: holding clients that stay
+    // within it would not help the measurement (it waits for someone else).
+    const double elapsed = static_cast<double>(t.elapsed_ns);
+    const bool slowed = t.elapsed_ns > 0 &&
+                        static_cast<double>(t.client_run_ns + t.network_run_ns) > settings_.busy_share * elapsed &&
+                        static_cast<double>(t.measurement_wait_ns) > settings_.wait_threshold * elapsed;
     if (slowed) ticks_since_wait_ = 0;
     else ++ticks_since_wait_;
     const auto linger_ticks = static_cast<std::uint64_t>(
@@ -110,7 +117,9 @@ void ClientGovernor::observe(const Tick& t) {
       // saved beyond one tick's share (no bursts after a quiet spell).
       const auto earned = static_cast<std::int64_t>(settings_.busy_share * static_cast<double>(t.elapsed_ns));
       if (!holding_.load()) balance_ns_ = 0;
-      balance_ns_ = std::min(balance_ns_ + earned - static_cast<std::int64_t>(t.client_run_ns), earned);
+      balance_ns_ = std::min(balance_ns_ + earned - static_cast<std::int64_t>(t.client_run_ns + t.network_run_ns),
+                             earned);
+      grant_ = true;
     } else {
       balance_ns_ = 0;
     }
@@ -132,7 +141,7 @@ ClientGovernor::Tick ClientGovernor::read_tick() {
   last_ = now;
   std::vector<Seen> next;
   next.reserve(threads.size());
-  std::size_t measuring = 0, clients = 0;
+  std::size_t measuring = 0, clients = 0, network = 0;
   for (const auto& [tid, kind] : threads) {
     ThreadTimes cur;
     if (kind == Kind::measurement) {
@@ -144,7 +153,7 @@ ClientGovernor::Tick ClientGovernor::read_tick() {
       const auto ns = thread_cpu_ns(tid);
       if (!ns) continue;
       cur.run_ns = *ns;
-      ++clients;
+      ++(kind == Kind::client ? clients : network);
     }
     const auto it = std::find_if(seen_.begin(), seen_.end(), [&](const Seen& s) { return s.tid == tid; });
     if (it != seen_.end()) {
@@ -154,7 +163,7 @@ ClientGovernor::Tick ClientGovernor::read_tick() {
         t.measurement_run_ns += run;
         t.measurement_wait_ns += wait;
       } else {
-        t.client_run_ns += run;
+        (kind == Kind::client ? t.client_run_ns : t.network_run_ns) += run;
       }
     }
     next.push_back({tid, cur});
@@ -163,6 +172,7 @@ ClientGovernor::Tick ClientGovernor::read_tick() {
   std::lock_guard lock(mu_);
   measurement_threads_ = measuring;
   client_threads_ = clients;
+  network_threads_ = network;
   return t;
 }
 
@@ -189,7 +199,8 @@ nlohmann::json ClientGovernor::stats() const {
                         {"client_cpu_s", 1e-9 * static_cast<double>(client_total_ns_)},
                         {"measurement_wait_s", 1e-9 * static_cast<double>(measurement_wait_total_ns_)},
                         {"measurement_threads", measurement_threads_},
-                        {"client_threads", client_threads_}};
+                        {"client_threads", client_threads_},
+                        {"network_threads", network_threads_}};
 }
 
 }  // namespace gonio::daemon::rpc

@@ -178,7 +178,6 @@ void yield_to_measurement() {
   thread_local bool lowered = false;
   if (lowered) return;
   lowered = true;
-  rpc::mark_client_thread();
   const auto tid = static_cast<id_t>(::gettid());
   errno = 0;
   const int now = ::getpriority(PRIO_PROCESS, tid);
@@ -392,11 +391,13 @@ void run_io(asio::io_context& io, int threads) {
   for (int i = 1; i < threads; ++i)
     more.emplace_back([&io] {
       yield_to_measurement();
+      rpc::mark_network_thread();
       io.run();
     });
   // Everything that keeps the daemon's priority is started by now: this thread's lower
   // priority is inherited only by what it starts from here on (the stopper at shutdown).
   yield_to_measurement();
+  rpc::mark_network_thread();
   io.run();
   for (auto& t : more) t.join();
 }
@@ -495,6 +496,11 @@ int run_daemon(const DaemonOptions& o) {
     rpc::Dispatcher dispatcher([&workers, &governor](std::function<void()> f) {
                                  asio::post(workers, [&governor, f = std::move(f)] {
                                    yield_to_measurement();
+                                   // The governor counts the requests' own CPU, on these
+                                   // threads: not the io threads' reading, writing and
+                                   // notifications, which follow the measurement's pace.
+                                   thread_local const bool counted = (rpc::mark_client_thread(), true);
+                                   (void)counted;
                                    governor.wait_turn();
                                    f();
                                  });
@@ -520,8 +526,8 @@ int run_daemon(const DaemonOptions& o) {
                       },
                       config.twin_data_dir.empty() ? state / "data" : fs::path(config.twin_data_dir),
                       telemetry.archive.get(),
-                      telemetry.mqtt.get()};
-    services.governor_stats = [&governor] { return governor.stats(); };
+                      telemetry.mqtt.get(),
+                      [&governor] { return governor.stats(); }};
     register_methods(dispatcher, services);
 
     const net::Context ctx{dispatcher, hub, auth, net::Limits::from(config), net_stats, load_dashboard(config)};

@@ -81,6 +81,8 @@ TEST(ClientGovernor, HoldsClientsOnlyWhileTheMeasurementWaitsBesideThem) {
   EXPECT_FALSE(g.holding());
   g.observe(tick(3, 0));     // it waited, but no client ran: holding them would not help
   EXPECT_FALSE(g.holding());
+  g.observe(tick(3, 0.4));   // nor clients within their share (0.5 ms of 10)
+  EXPECT_FALSE(g.holding());
   g.observe(tick(0.1, 5));   // 1 % of the tick: below the threshold
   EXPECT_FALSE(g.holding());
   g.observe(tick(3, 5));     // slowed beside clients
@@ -101,23 +103,35 @@ TEST(ClientGovernor, LetsGoAfterTheLingerWithoutWaits) {
 }
 
 TEST(ClientGovernor, PacesClientWorkToItsShareWhileHolding) {
-  ClientGovernor g(settings(), false);
+  auto s = settings();
+  s.linger = 1s;  // every tick below is within it
+  ClientGovernor g(s, false);
   g.wait_turn();  // not holding: returns at once
-  // Clients used 2 ms of a 10 ms tick; their share is 0.5 ms: 1.5 ms over.
+  const auto turn = [&] { return std::async(std::launch::async, [&] { g.wait_turn(); }); };
+  // Clients used 2 ms of a 10 ms tick; their share is 0.5 ms: 1.5 ms over. While overdrawn,
+  // one request a tick goes ahead, and no more.
   g.observe(tick(3, 2));
   ASSERT_TRUE(g.holding());
-  auto waiting = std::async(std::launch::async, [&] { g.wait_turn(); });
-  EXPECT_EQ(waiting.wait_for(50ms), std::future_status::timeout) << "ran beyond its share";
-  g.observe(tick(3, 0));  // +0.5 ms: still 1.0 ms over
+  EXPECT_EQ(turn().wait_for(5s), std::future_status::ready) << "the tick's one request";
+  auto second = turn();
+  EXPECT_EQ(second.wait_for(50ms), std::future_status::timeout) << "ran beyond its share";
+  g.observe(tick(3, 0));  // +0.5 ms: still 1.0 ms over; the next tick's one request
+  EXPECT_EQ(second.wait_for(5s), std::future_status::ready);
+  auto third = turn();
+  EXPECT_EQ(third.wait_for(50ms), std::future_status::timeout);
   g.observe(tick(3, 0));  // 0.5 ms over
-  EXPECT_EQ(waiting.wait_for(50ms), std::future_status::timeout);
-  g.observe(tick(3, 0));  // repaid
-  EXPECT_EQ(waiting.wait_for(5s), std::future_status::ready);
+  EXPECT_EQ(third.wait_for(5s), std::future_status::ready);
+  auto fourth = turn();
+  EXPECT_EQ(fourth.wait_for(50ms), std::future_status::timeout);
+  g.observe(tick(3, 0));  // repaid: everyone goes
+  EXPECT_EQ(fourth.wait_for(5s), std::future_status::ready);
+  EXPECT_EQ(turn().wait_for(5s), std::future_status::ready);
   // Quiet ticks do not save up more than one tick's share.
   for (int i = 0; i < 10; ++i) g.observe(tick(3, 0.1));
   ASSERT_TRUE(g.holding());
   g.observe(tick(3, 1.5));  // 1.5 ms used against at most 0.5 + 0.5 ms
-  auto again = std::async(std::launch::async, [&] { g.wait_turn(); });
+  EXPECT_EQ(turn().wait_for(5s), std::future_status::ready);
+  auto again = turn();
   EXPECT_EQ(again.wait_for(50ms), std::future_status::timeout);
   g.stop();  // shutdown releases every waiter
   EXPECT_EQ(again.wait_for(5s), std::future_status::ready);

@@ -181,7 +181,7 @@ class RegisteredMethods : public ::testing::Test {
     alerts_.emplace(*store_, hub_);
     instrument_.emplace(config_, *store_, *twin_, *alerts_, hub_);
     services_.emplace(Services{config_, dir_, *store_, *auth_, hub_, *twin_, *alerts_, *instrument_,
-                               &d_, std::chrono::steady_clock::now(), utc::now(), nullptr, nullptr, nullptr, {}, nullptr, nullptr});
+                               &d_, std::chrono::steady_clock::now(), utc::now(), nullptr, nullptr, nullptr, {}, nullptr, nullptr, nullptr});
     register_methods(d_, *services_);
   }
   ~RegisteredMethods() override {

@@ -145,6 +145,15 @@ class ScanEvidence {
   std::vector<std::size_t> cross_of_;      // extended index of column j's interaction, or npos
   std::vector<std::size_t> partner_;       // the column j interacts with (β += c·θ_j·θ_partner)
   std::size_t residual_ = 0;               // extended index of r
+  // Per wavelength band of the verdict (up to three), the moments band_decision needs, so
+  // that a verdict costs the same at the thousandth point as at the tenth: Σ p²/v, Σ p·r/v,
+  // and per column Σ p·s/v of its sensitivity, its curvature and its interaction term.
+  struct BandMoments {
+    double pp = 0, pr = 0;
+    std::vector<double> ps, pc2, px;
+  };
+  std::vector<BandMoments> bands_;
+  std::vector<std::size_t> band_of_;       // each channel's band
   std::size_t n_ = 0;
 };
 

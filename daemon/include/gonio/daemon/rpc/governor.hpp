@@ -4,11 +4,13 @@
 // Thread priorities alone cannot promise that. A client thread ten nice steps down weighs a
 // tenth of a runner thread, but there are many of them, and a load generator or a browser on
 // the same machine runs at full weight. So the governor watches the measurement itself: the
-// runner and the twin's workers say who they are (mark_measurement_thread), and every tick it
-// reads from the kernel how long they were runnable but waiting for a core
+// scan runner says who it is (mark_measurement_thread), and every tick the governor reads
+// from the kernel how long it was runnable but waiting for a core
 // (/proc/self/task/<tid>/schedstat, the run-queue delay). While they wait — the measurement is
 // being slowed by someone — client work is held to a small share of one core
-// (`server.client_share_busy`), counted from the client threads' own CPU time; when they stop
+// (`server.client_share_busy`), counted from the CPU time of the threads that serve clients
+// (the RPC workers and the network threads), with at least one request a tick let through so
+// that notifications, which follow the scan's pace, cannot stop requests; when they stop
 // waiting for a while, client work is free again. Control methods (pause, resume, cancel,
 // reset) run on threads of their own and are never held.
 #pragma once
@@ -35,11 +37,12 @@ struct ThreadTimes {
 };
 std::optional<ThreadTimes> thread_times(pid_t tid);
 
-// The calling thread does the measurement (the runner, the twin's workers) or client work
+// The calling thread does the measurement (the scan runner) or client work
 // (network threads, RPC workers). Process-wide, for the governor to read; a thread that exits
 // is dropped when the kernel no longer knows it.
 void mark_measurement_thread();
-void mark_client_thread();
+void mark_client_thread();   // runs client requests (the RPC workers)
+void mark_network_thread();  // reads, writes and pushes for clients (the io threads)
 
 class ClientGovernor {
  public:
@@ -57,6 +60,7 @@ class ClientGovernor {
   struct Tick {
     std::uint64_t measurement_run_ns = 0, measurement_wait_ns = 0, client_run_ns = 0;
     std::uint64_t elapsed_ns = 0;
+    std::uint64_t network_run_ns = 0;  // the network threads' CPU (reading, writing, pushing)
   };
 
   // `sample`: starts the thread that reads the kernel every tick; false for tests that feed
@@ -78,7 +82,7 @@ class ClientGovernor {
   void stop();
 
   // system.info: {holding, busy_share, ticks_held, client_cpu_s, measurement_wait_s,
-  // measurement_threads, client_threads}.
+  // measurement_threads, client_threads, network_threads}.
   nlohmann::json stats() const;
 
  private:
@@ -94,9 +98,10 @@ class ClientGovernor {
   // While holding: client CPU earned (busy_share of each tick) less client CPU used; client
   // work waits while it is negative.
   std::int64_t balance_ns_ = 0;
+  bool grant_ = false;  // the one request of this tick that goes ahead while overdrawn
   std::uint64_t ticks_since_wait_ = 0;
   std::uint64_t ticks_held_ = 0, client_total_ns_ = 0, measurement_wait_total_ns_ = 0;
-  std::size_t measurement_threads_ = 0, client_threads_ = 0;
+  std::size_t measurement_threads_ = 0, client_threads_ = 0, network_threads_ = 0;
   // Last readings per thread (the sampler's own state).
   struct Seen {
     pid_t tid;
