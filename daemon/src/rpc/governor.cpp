@@ -103,7 +103,12 @@ void ClientGovernor::observe(const Tick& t) {
     // Slowed beside clients that took more than their share: holding clients that stay
     // within it would not help the measurement (it waits for someone else).
     const double elapsed = static_cast<double>(t.elapsed_ns);
+    // ... and only a measurement that wants the CPU most of the tick (a runner that waits for
+    // the arms, or does a point's arithmetic in a millisecond now and then, is not slowed in
+    // any way that matters by a client's request).
     const bool slowed = t.elapsed_ns > 0 &&
+                        static_cast<double>(t.measurement_run_ns + t.measurement_wait_ns) >=
+                            settings_.busy_fraction * elapsed &&
                         static_cast<double>(t.client_run_ns + t.network_run_ns) > settings_.busy_share * elapsed &&
                         static_cast<double>(t.measurement_wait_ns) > settings_.wait_threshold * elapsed;
     if (slowed) ticks_since_wait_ = 0;

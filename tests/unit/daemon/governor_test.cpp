@@ -85,6 +85,9 @@ TEST(ClientGovernor, HoldsClientsOnlyWhileTheMeasurementWaitsBesideThem) {
   EXPECT_FALSE(g.holding());
   g.observe(tick(0.1, 5));   // 1 % of the tick: below the threshold
   EXPECT_FALSE(g.holding());
+  g.observe({.measurement_run_ns = 1'000'000, .measurement_wait_ns = 1'000'000, .client_run_ns = 5'000'000,
+             .elapsed_ns = 10'000'000});  // it waited, but wants only a fifth of the tick
+  EXPECT_FALSE(g.holding());
   g.observe(tick(3, 5));     // slowed beside clients
   EXPECT_TRUE(g.holding());
   EXPECT_EQ(g.stats()["ticks_held"], 1);

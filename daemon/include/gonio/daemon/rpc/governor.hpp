@@ -52,6 +52,9 @@ class ClientGovernor {
     double busy_share = 0.05;
     // The measurement counts as slowed when its threads together waited this share of a tick.
     double wait_threshold = 0.02;
+    // ... and was runnable (running or waiting) for at least this share of it: the
+    // measurement is bound by the CPU, not by its devices.
+    double busy_fraction = 0.5;
     // How long client work stays held after the measurement last waited.
     std::chrono::milliseconds linger{500};
   };
