@@ -147,7 +147,9 @@ ClientGovernor::Tick ClientGovernor::read_tick() {
   std::vector<Seen> next;
   next.reserve(threads.size());
   std::size_t measuring = 0, clients = 0, network = 0;
-  for (const auto& [tid, kind] : threads) {
+  for (const auto& entry : threads) {
+    const pid_t tid = entry.first;  // not a structured binding: the lambda below captures it
+    const Kind kind = entry.second;
     ThreadTimes cur;
     if (kind == Kind::measurement) {
       const auto tt = thread_times(tid);
