@@ -183,8 +183,6 @@ void ScanEvidence::add(const PointRecord& rec) {
       if (e.random && c < e.contribution.size()) var += e.contribution[c] * e.contribution[c];
     const double r = m.values[c] - q.values[c];
     pt.p.push_back(q.values[c]);
-    pt.r.push_back(r);
-    pt.v.push_back(var);
     if (!(var > 0)) continue;
     const double w = 1.0 / var;
     for (std::size_t j = 0; j < names_.size(); ++j) {

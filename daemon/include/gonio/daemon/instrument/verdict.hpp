@@ -97,7 +97,7 @@ class ScanEvidence {
     bool bounded = false; // rectangular or triangular: held within ±limit when not free
   };
   struct Point {
-    std::vector<double> p, r, v;                 // per channel
+    std::vector<double> p;                       // the prediction, per channel
     std::vector<std::vector<double>> columns;   // per column, per channel
     std::vector<std::vector<double>> curvature; // per column (empty: linear), per channel
     std::vector<std::vector<double>> cross;     // per column with a partner, per channel
