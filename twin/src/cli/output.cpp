@@ -19,7 +19,8 @@ double channel_mean(const std::vector<double>& v) {
 }
 
 nlohmann::json prediction_json(const Prediction& p) {
-  nlohmann::json diag = {{"mean_theta_i", p.diagnostics.mean_theta_i},
+  nlohmann::json diag = {{"sampling", to_text(p.diagnostics.sampling)},
+                         {"mean_theta_i", p.diagnostics.mean_theta_i},
                          {"mean_theta_r", p.diagnostics.mean_theta_r},
                          {"converged", p.diagnostics.converged}};
   // NaN is not JSON: the baseline estimator cannot tell the seen fraction.

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <limits>
+#include <optional>
 
+#include "gonio/twin/detail/core/lobe_sampler.hpp"
 #include "gonio/twin/detail/core/sobol.hpp"
 
 namespace gonio::twin::detail {
@@ -83,31 +85,73 @@ FluxEstimator::FluxEstimator(const MeasurementSetup& setup, const Bsdf& sample,
       variant_sums_(variants_.size() * static_cast<std::size_t>(replicates) * channels_, 0.0),
       sample_narrow_(narrow_at_aperture_scale(setup, sample, false)),
       reference_narrow_(reference && narrow_at_aperture_scale(setup, *reference, true)),
-      lobe_scale_(kind == EstimatorKind::rqmc ? lobe_scale(setup, sample) : 0.0) {}
+      lobe_scale_(kind == EstimatorKind::rqmc ? lobe_scale(setup, sample) : Vec2{0, 0}),
+      lobe_alone_(lobe_alone(setup, sample, lobe_scale_)) {}
 
-// The width of the sample's reflection lobe in the source aperture's tangent units, seen
-// from the receiver's axis: the offset from the mirror direction along the aperture's
-// in-plane axis at which f falls to a quarter of its value there (for GGX, (1 + r²/s²)⁻²,
-// that is r = s). 0 — no lobe strategy — when the lobe is not narrower than the aperture's
-// full width, when the mirror direction is behind the source arm, for an elliptical
+// The widths of the sample's reflection lobe in the source aperture's tangent units, seen
+// from the receiver's axis: along each tangent axis, the offset from the mirror direction at
+// which f falls to a quarter of its value there (for GGX, (1 + r²/s²)⁻², that is r = s:
+// the scale of lobe_sampler.hpp's density). An axis along which the lobe is not narrower
+// than the aperture's full width gets that width. {0, 0} — no lobe strategy — when neither
+// axis is narrower, when the mirror direction is behind the source arm, for an elliptical
 // aperture, and in transmission.
-double FluxEstimator::lobe_scale(const MeasurementSetup& s, const Bsdf& bsdf) {
-  if (s.source_aperture.ellipse || s.transmission) return 0;
+Vec2 FluxEstimator::lobe_scale(const MeasurementSetup& s, const Bsdf& bsdf) {
+  if (s.source_aperture.ellipse || s.transmission) return {0, 0};
   const Vec3 wo = s.receiver.a;
   Vec2 m;
-  if (!tangent_of(s.source, {-wo.x, -wo.y, wo.z}, m)) return 0;
+  if (!tangent_of(s.source, {-wo.x, -wo.y, wo.z}, m)) return {0, 0};
   std::vector<double> f(bsdf.channels());
-  const auto at = [&](double dx) {
-    bsdf.eval(direction_from_tangent(s.source, {m.x + dx, m.y}).w, wo, f);
+  const auto at = [&](double dx, double dy) {
+    bsdf.eval(direction_from_tangent(s.source, {m.x + dx, m.y + dy}).w, wo, f);
     return channel_mean(f);
   };
-  const double f0 = at(0);
-  if (!(f0 > 0)) return 0;
-  const double tx = s.source_aperture.tx;
-  if (at(2 * tx) >= f0 / 4) return 0;
-  double d = tx;
-  for (int k = 0; k < 40 && at(d) < f0 / 4; ++k) d *= 0.8;
-  return d;
+  const double f0 = at(0, 0);
+  if (!(f0 > 0)) return {0, 0};
+  // Along (ex, ey): the limit when f is still above a quarter there, else the crossing
+  // bracketed by halving and refined by bisection (to 1 %: a scale, not a root).
+  const auto quarter = [&](double ex, double ey, double limit) {
+    if (at(limit * ex, limit * ey) >= f0 / 4) return limit;
+    double below = limit, above = limit / 2;
+    for (int k = 0; k < 40 && at(above * ex, above * ey) < f0 / 4; ++k) below = above, above /= 2;
+    for (int k = 0; k < 8; ++k) {
+      const double mid = 0.5 * (above + below);
+      (at(mid * ex, mid * ey) >= f0 / 4 ? above : below) = mid;
+    }
+    return 0.5 * (above + below);
+  };
+  const double wx = 2 * s.source_aperture.tx, wy = 2 * s.source_aperture.ty;
+  const Vec2 scale{quarter(1, 0, wx), quarter(0, 1, wy)};
+  if (scale.x >= wx && scale.y >= wy) return {0, 0};
+  return scale;
+}
+
+// Whether the lobe strategy can carry the sample alone: its density is positive on the whole
+// aperture, so it is unbiased by itself, and when f / p varies little over the aperture its
+// estimate is nearly constant — where the balance heuristic with the uniform draw would add
+// the uniform draw's own variance, of the order of the flux squared (Veach 1997, Theorem
+// 9.2), and an evaluation of f. Probed at the nominal directions on a 9 × 9 grid of the
+// aperture: alone when f / p nowhere exceeds 4 times its value at the mirror direction (a
+// GGX lobe: below 2; a lobe on a diffuse base that dominates the aperture's corners: not).
+bool FluxEstimator::lobe_alone(const MeasurementSetup& s, const Bsdf& bsdf, Vec2 scale) {
+  if (!(scale.x > 0)) return false;
+  const Vec3 wo = s.receiver.a;
+  Vec2 m;
+  if (!tangent_of(s.source, {-wo.x, -wo.y, wo.z}, m)) return false;
+  const Vec2 half{s.source_aperture.tx, s.source_aperture.ty};
+  const LobeSampler lobe(m, scale, half);
+  if (!lobe.usable()) return false;
+  std::vector<double> f(bsdf.channels());
+  const auto ratio = [&](Vec2 t) {
+    bsdf.eval(direction_from_tangent(s.source, t).w, wo, f);
+    return channel_mean(f) / lobe.pdf(t);
+  };
+  const Vec2 at_mirror{std::clamp(m.x, -half.x, half.x), std::clamp(m.y, -half.y, half.y)};
+  const double r0 = ratio(at_mirror);
+  if (!(r0 > 0)) return false;
+  for (int i = 0; i < 9; ++i)
+    for (int j = 0; j < 9; ++j)
+      if (!(ratio({half.x * (i - 4) / 4.0, half.y * (j - 4) / 4.0}) <= 4 * r0)) return false;
+  return true;
 }
 
 // Whether a BSDF varies on the scale of the source aperture for this geometry, i.e. whether
@@ -151,6 +195,12 @@ void FluxEstimator::run_until(std::uint64_t n) {
 
 Diagnostics FluxEstimator::diagnostics() const {
   Diagnostics d;
+  if (kind_ == EstimatorKind::baseline)
+    d.sampling = SourceSampling::baseline;
+  else if (lobe_scale_.x > 0)
+    d.sampling = lobe_alone_ ? SourceSampling::lobe : SourceSampling::lobe_aperture;
+  else
+    d.sampling = sample_narrow_ ? SourceSampling::aperture_bsdf : SourceSampling::aperture;
   // The baseline samples sample-plane points, not footprints: it cannot tell.
   if (kind_ == EstimatorKind::baseline)
     d.seen_fraction = std::numeric_limits<double>::quiet_NaN();
@@ -280,56 +330,50 @@ void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
       }
     };
 
-    // Strategy 3, for a lobe narrower than the source aperture: ωi from truncated Cauchy
-    // densities about ωo's mirror direction in each tangent axis of the aperture (scale
-    // lobe_scale_). Every draw lies in the aperture and moves continuously with its
-    // uniforms — no acceptance test, unlike BSDF sampling — and the Cauchy tails (r⁻² per
-    // axis) are heavier than a microfacet lobe's (r⁻⁴). Off the peak, where the lobe reaches
-    // the aperture only at its edge nearest the mirror direction, it puts the draws there.
-    // All three strategies enter the balance heuristic (one draw each: Veach 1997, §9.2).
-    // pdf3_of: its density in solid angle at a direction (0 outside the aperture).
-    const bool cauchy = lobe_scale_ > 0;
-    double cx = 0, cy = 0, ax = 0, bx = 0, ay = 0, by = 0;
-    const double sc = lobe_scale_, tx = S.source_aperture.tx, ty = S.source_aperture.ty;
-    bool cauchy_ok = false;
-    if (cauchy) {
+    // Strategy 3, for a lobe narrower than the source aperture: ωi from the lobe's shape
+    // truncated to the aperture about ωo's mirror direction (lobe_sampler.hpp). Every draw
+    // lies in the aperture and moves continuously with its uniforms — no acceptance test,
+    // unlike BSDF sampling — and its density follows the lobe's, so f / p hardly varies.
+    // Off the peak, where the lobe reaches the aperture only at its edge nearest the mirror
+    // direction, it puts the draws there. pdf3_of: its density in solid angle at a
+    // direction (0 outside the aperture).
+    std::optional<LobeSampler> lobe_draw;
+    if (lobe_scale_.x > 0) {
       Vec2 m;
-      cauchy_ok = tangent_of(S.source, {-wo.x, -wo.y, wo.z}, m);
-      if (cauchy_ok) {
-        cx = m.x, cy = m.y;
-        ax = std::atan((-tx - cx) / sc), bx = std::atan((tx - cx) / sc);
-        ay = std::atan((-ty - cy) / sc), by = std::atan((ty - cy) / sc);
+      if (tangent_of(S.source, {-wo.x, -wo.y, wo.z}, m)) {
+        lobe_draw.emplace(m, lobe_scale_, Vec2{S.source_aperture.tx, S.source_aperture.ty});
+        if (!lobe_draw->usable()) lobe_draw.reset();
       }
     }
     const auto pdf3_of = [&](const Vec3& wi) {
-      if (!cauchy_ok) return 0.0;
       Vec2 t;
-      if (!tangent_of(S.source, wi, t) || !S.source_aperture.contains_tangent(t)) return 0.0;
-      const double zx = (t.x - cx) / sc, zy = (t.y - cy) / sc;
-      const double q = 1.0 / (sc * (bx - ax) * (1 + zx * zx)) / (sc * (by - ay) * (1 + zy * zy));
+      if (!lobe_draw || !tangent_of(S.source, wi, t)) return 0.0;
       const double cg = dot(wi, S.source.a);
-      return q / (cg * cg * cg);
+      return lobe_draw->pdf(t) / (cg * cg * cg);
     };
-    const bool mis_b = sample_narrow_;
-    const bool power = sample_narrow_ && !cauchy;
+    // BSDF sampling serves what the lobe strategy does not: a narrow lobe through an
+    // elliptical aperture, or one off the mirror direction.
+    const bool mis_b = sample_narrow_ && !lobe_draw;
+    const bool power = sample_narrow_ && !lobe_draw;
     // Strategy 1: uniform over the source aperture.
     {
       const auto id = direction_from_tangent(S.source, aperture_point(S.source_aperture, u[4], u[5]));
       const double pdf1 = 1.0 / (src_area * id.cos_gamma3);
       const double pdf2 = mis_b ? sample_.pdf(wo, id.w) : 0;
-      const double pdf3 = pdf3_of(id.w);
+      const bool alone = lobe_draw && lobe_alone_;  // the draw serves the reference only
+      const double pdf3 = alone ? 0 : pdf3_of(id.w);
       const double pdf2r = reference_narrow_ ? reference_->pdf(wo_ref, id.w) : 0;
-      contribute(id.w, mis_over_pdf(pdf1, pdf1, pdf2, pdf3, power),
+      contribute(id.w, alone ? 0.0 : mis_over_pdf(pdf1, pdf1, pdf2, pdf3, power),
                  reference_narrow_ ? mis_weights(pdf1, pdf2r).aperture : 1.0 / pdf1);
     }
-    if (cauchy_ok) {
-      const Vec2 t{std::clamp(cx + sc * std::tan(ax + u[7] * (bx - ax)), -tx, tx),
-                   std::clamp(cy + sc * std::tan(ay + u[5] * (by - ay)), -ty, ty)};
-      const auto id = direction_from_tangent(S.source, t);
+    if (lobe_draw) {
+      const auto draw = lobe_draw->sample(u[7], u[6]);
+      const auto id = direction_from_tangent(S.source, draw.t);
       const double pdf1 = 1.0 / (src_area * id.cos_gamma3);
       const double pdf2 = mis_b ? sample_.pdf(wo, id.w) : 0;
-      const double pdf3 = pdf3_of(id.w);
-      if (pdf3 > 0) contribute(id.w, mis_over_pdf(pdf3, pdf1, pdf2, pdf3, power), 0);
+      const double pdf3 = draw.pdf / id.cos_gamma3;
+      if (pdf3 > 0)
+        contribute(id.w, lobe_alone_ ? 1.0 / pdf3 : mis_over_pdf(pdf3, pdf1, pdf2, pdf3, power), 0);
     }
     // Strategy 2: BSDF importance sampling given wo, kept when it lands in the aperture.
     const auto bsdf_strategy = [&](const Bsdf& bsdf, const Vec3& wo_b, bool for_sample) {

@@ -267,6 +267,7 @@ std::vector<Prediction> Twin::predict_with(const Geometry& g, const EstimatorOpt
   for (std::size_t v = 1; v < all.size(); ++v)
     for (std::size_t c = 0; c < C; ++c) estimate(v, c, all[v].beta[c], all[v].std_error[c]);
   const auto diag = est.diagnostics();
+  out.diagnostics.sampling = diag.sampling;
   out.diagnostics.seen_fraction = diag.seen_fraction;
   out.diagnostics.mean_theta_i = diag.mean_theta_i;
   out.diagnostics.mean_theta_r = diag.mean_theta_r;

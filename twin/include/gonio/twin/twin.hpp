@@ -10,6 +10,7 @@
 #include <memory>
 #include <vector>
 
+#include "gonio/proto/enum_text.hpp"
 #include "gonio/proto/geometry.hpp"
 #include "gonio/proto/spectrum.hpp"
 #include "gonio/twin/bsdf.hpp"
@@ -36,7 +37,21 @@ struct EstimatorOptions {
   void validate() const;
 };
 
+// How the rqmc estimator drew the sample's source directions (estimator.hpp): uniformly over
+// the aperture; that and BSDF sampling (power heuristic); from the lobe's own shape alone;
+// the lobe's shape and the uniform draw (balance heuristic). The baseline has its own.
+enum class SourceSampling { aperture, aperture_bsdf, lobe, lobe_aperture, baseline };
+inline constexpr EnumNames<SourceSampling, 5> kSourceSamplingNames{{
+    {SourceSampling::aperture, "aperture"},
+    {SourceSampling::aperture_bsdf, "aperture+bsdf"},
+    {SourceSampling::lobe, "lobe"},
+    {SourceSampling::lobe_aperture, "lobe+aperture"},
+    {SourceSampling::baseline, "baseline"},
+}};
+constexpr const auto& enum_names(SourceSampling) { return kSourceSamplingNames; }  // proto/enum_text.hpp
+
 struct Diagnostics {
+  SourceSampling sampling = SourceSampling::aperture;
   double seen_fraction = 1;   // flux-weighted fraction of the lit footprint that is seen
   double mean_theta_i = 0;    // flux-weighted mean incidence angle, degrees
   double mean_theta_r = 0;    // flux-weighted mean receiving angle, degrees (signed)

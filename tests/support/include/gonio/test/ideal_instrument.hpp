@@ -4,7 +4,8 @@
 // perfect white diffuser. It shares no code with the twin's estimator: directions come from
 // tangent-plane coordinates (ω = normalize(a + x t + y p), dω = cos³γ dx dy) and the lit
 // area is not clipped — for a beam whose footprint lies inside the viewed area and on the
-// sample, A |cos θi| is the beam's cross-section, a constant, so only f |cos θo| remains.
+// sample, A |cos θi| is the beam's cross-section (perpendicular to the source's axis) seen
+// along ωi, S cos γi, so only f |cos θo| cos γi remains.
 #pragma once
 
 #include <array>
@@ -78,7 +79,7 @@ struct IdealInstrument {
       for (std::size_t b = 0; b < n; ++b) {
         double js = 0;
         const Vec3 wi = dir(as, ts, p, sx * xs[a], sy * xs[b], js);
-        const double wsrc = ws[a] * ws[b] * js;
+        const double wsrc = ws[a] * ws[b] * js * std::cbrt(js);  // dω · cos γi
         for (std::size_t c = 0; c < n; ++c)
           for (std::size_t d = 0; d < n; ++d) {
             double jr = 0;

@@ -12,11 +12,12 @@
 // L |cos θo| dA dωo. The spatial integral is done exactly (polygon clipping); the 4-D
 // angular one by Monte Carlo:
 //
-//   rqmc      ωo uniform in Ωr (tangent plane); ωi uniform in Ωs — and, for BSDFs that
-//             vary on the aperture's scale, also by BSDF importance sampling given ωo, and
-//             for a lobe narrower than Ωs by truncated Cauchy densities about ωo's mirror
-//             direction, combined with the balance heuristic (Veach 1997, §9.2); delta
-//             lobes exactly. Points are Owen-scrambled Sobol, one scramble per replicate.
+//   rqmc      ωo uniform in Ωr (tangent plane); ωi uniform in Ωs — and, for a lobe
+//             narrower than Ωs, from the lobe's own shape truncated to Ωs about ωo's mirror
+//             direction (lobe_sampler.hpp), or, for other BSDFs that vary on the aperture's
+//             scale, by BSDF importance sampling given ωo; combined with the balance or
+//             power heuristic (Veach 1997, §9.2); delta lobes exactly. Points are
+//             Owen-scrambled Sobol, one scramble per replicate.
 //   baseline  the founding paper's scheme (eqs. 2–5): a uniform point on the receiver's
 //             pupil and a uniform direction over the detector's (slit's) aperture, weighted
 //             by (n·v)^4 = cos⁴γ; the ray is followed to the sample plane; ωi uniform in Ωs;
@@ -100,9 +101,12 @@ class FluxEstimator {
   std::vector<double> variant_sums_;  // [variant][replicate][channel]
   // Diagnostics: flux-weighted sums (channel-mean weights).
   bool sample_narrow_ = false, reference_narrow_ = false;  // use BSDF sampling (MIS)
-  // Strategy 3's scale (tangent units; 0: not used), see lobe_scale().
-  double lobe_scale_ = 0;
-  static double lobe_scale(const MeasurementSetup& s, const Bsdf& bsdf);
+  // Strategy 3's scales per tangent axis (0: not used), see lobe_scale().
+  Vec2 lobe_scale_{0, 0};
+  static Vec2 lobe_scale(const MeasurementSetup& s, const Bsdf& bsdf);
+  // Whether strategy 3 draws the sample's ωi alone, see lobe_alone().
+  bool lobe_alone_ = false;
+  static bool lobe_alone(const MeasurementSetup& s, const Bsdf& bsdf, Vec2 scale);
   double w_sum_ = 0, w_seen_ = 0, w_lit_ = 0, w_theta_i_ = 0, w_theta_r_ = 0;
 };
 
