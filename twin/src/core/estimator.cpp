@@ -3,6 +3,7 @@
 #include "gonio/twin/detail/core/estimator.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <optional>
 
@@ -93,10 +94,9 @@ FluxEstimator::FluxEstimator(const MeasurementSetup& setup, const Bsdf& sample,
 // which f falls to a quarter of its value there (for GGX, (1 + r²/s²)⁻², that is r = s:
 // the scale of lobe_sampler.hpp's density). An axis along which the lobe is not narrower
 // than the aperture's full width gets that width. {0, 0} — no lobe strategy — when neither
-// axis is narrower, when the mirror direction is behind the source arm, for an elliptical
-// aperture, and in transmission.
+// axis is narrower, when the mirror direction is behind the source arm, and in transmission.
 Vec2 FluxEstimator::lobe_scale(const MeasurementSetup& s, const Bsdf& bsdf) {
-  if (s.source_aperture.ellipse || s.transmission) return {0, 0};
+  if (s.transmission) return {0, 0};
   const Vec3 wo = s.receiver.a;
   Vec2 m;
   if (!tangent_of(s.source, {-wo.x, -wo.y, wo.z}, m)) return {0, 0};
@@ -138,19 +138,26 @@ bool FluxEstimator::lobe_alone(const MeasurementSetup& s, const Bsdf& bsdf, Vec2
   Vec2 m;
   if (!tangent_of(s.source, {-wo.x, -wo.y, wo.z}, m)) return false;
   const Vec2 half{s.source_aperture.tx, s.source_aperture.ty};
-  const LobeSampler lobe(m, scale, half);
+  const LobeSampler lobe(m, scale, s.source_aperture);
   if (!lobe.usable()) return false;
   std::vector<double> f(bsdf.channels());
   const auto ratio = [&](Vec2 t) {
     bsdf.eval(direction_from_tangent(s.source, t).w, wo, f);
     return channel_mean(f) / lobe.pdf(t);
   };
-  const Vec2 at_mirror{std::clamp(m.x, -half.x, half.x), std::clamp(m.y, -half.y, half.y)};
-  const double r0 = ratio(at_mirror);
-  if (!(r0 > 0)) return false;
+  // The mirror direction, or the aperture's point nearest it along the line to the centre.
+  Vec2 at_mirror{std::clamp(m.x, -half.x, half.x), std::clamp(m.y, -half.y, half.y)};
+  if (s.source_aperture.ellipse) {
+    const double r = std::hypot(m.x / half.x, m.y / half.y);
+    at_mirror = r > 1 ? Vec2{m.x / r, m.y / r} : m;
+  }
+  const double r0 = ratio({0.98 * at_mirror.x, 0.98 * at_mirror.y});
+  if (!(r0 > 0 && std::isfinite(r0))) return false;
   for (int i = 0; i < 9; ++i)
-    for (int j = 0; j < 9; ++j)
-      if (!(ratio({half.x * (i - 4) / 4.0, half.y * (j - 4) / 4.0}) <= 4 * r0)) return false;
+    for (int j = 0; j < 9; ++j) {
+      const Vec2 t{0.98 * half.x * (i - 4) / 4.0, 0.98 * half.y * (j - 4) / 4.0};
+      if (s.source_aperture.contains_tangent(t) && !(ratio(t) <= 4 * r0)) return false;
+    }
   return true;
 }
 
@@ -341,7 +348,7 @@ void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
     if (lobe_scale_.x > 0) {
       Vec2 m;
       if (tangent_of(S.source, {-wo.x, -wo.y, wo.z}, m)) {
-        lobe_draw.emplace(m, lobe_scale_, Vec2{S.source_aperture.tx, S.source_aperture.ty});
+        lobe_draw.emplace(m, lobe_scale_, S.source_aperture);
         if (!lobe_draw->usable()) lobe_draw.reset();
       }
     }
@@ -372,7 +379,7 @@ void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
       const double pdf1 = 1.0 / (src_area * id.cos_gamma3);
       const double pdf2 = mis_b ? sample_.pdf(wo, id.w) : 0;
       const double pdf3 = draw.pdf / id.cos_gamma3;
-      if (pdf3 > 0)
+      if (draw.pdf > 0)
         contribute(id.w, lobe_alone_ ? 1.0 / pdf3 : mis_over_pdf(pdf3, pdf1, pdf2, pdf3, power), 0);
     }
     // Strategy 2: BSDF importance sampling given wo, kept when it lands in the aperture.

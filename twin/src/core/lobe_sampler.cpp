@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace gonio::twin::detail {
 namespace {
@@ -45,32 +46,47 @@ double t2_conditional_inverse(double g) noexcept {
   return g < 0 ? -t : t;
 }
 
-LobeSampler::LobeSampler(Vec2 centre, Vec2 scale, Vec2 half) noexcept
-    : c_(centre), s_(scale), hx_(half.x), hy_(half.y) {
-  const double ax = (-half.x - centre.x) / scale.x, bx = (half.x - centre.x) / scale.x;
-  ay_ = (-half.y - centre.y) / scale.y;
-  by_ = (half.y - centre.y) / scale.y;
-  fa_ = marginal_cdf(ax);
-  df_ = marginal_cdf(bx) - fa_;
-  inv_area_scale_ = 1.0 / (scale.x * scale.y * df_);
-  dgy_ = t2_conditional_cdf(by_) - t2_conditional_cdf(ay_);
+LobeSampler::LobeSampler(Vec2 centre, Vec2 scale, const Aperture& aperture) noexcept
+    : c_(centre), s_(scale), ap_(aperture) {
+  fa_ = marginal_cdf((-ap_.tx - c_.x) / s_.x);
+  df_ = marginal_cdf((ap_.tx - c_.x) / s_.x) - fa_;
+  inv_area_scale_ = 1.0 / (s_.x * s_.y * df_);
+  // At the x-marginal's median, which lies strictly inside the aperture.
+  const double c = fa_ + 0.5 * df_;
+  const auto [ay, by] = y_window(std::clamp(c_.x + s_.x * c / std::sqrt((1 - c) * (1 + c)), -ap_.tx, ap_.tx));
+  dgy_ = t2_conditional_cdf(by) - t2_conditional_cdf(ay);
+}
+
+// The aperture's extent in y at x, in z units: the rectangle's, or the ellipse's chord.
+std::pair<double, double> LobeSampler::y_window(double x) const noexcept {
+  double h = ap_.ty;
+  if (ap_.ellipse) {
+    const double r = x / ap_.tx;
+    h *= std::sqrt(std::max(0.0, 1 - r * r));
+  }
+  return {(-h - c_.y) / s_.y, (h - c_.y) / s_.y};
 }
 
 LobeSampler::Draw LobeSampler::sample(double u0, double u1) const noexcept {
   const double c = std::clamp(fa_ + u0 * df_, -1 + 1e-16, 1 - 1e-16);
   const double zx = c / std::sqrt((1 - c) * (1 + c));
+  const double x = std::clamp(c_.x + s_.x * zx, -ap_.tx, ap_.tx);
   const double k2 = 1 + zx * zx, k = std::sqrt(k2);
-  const double ga = t2_conditional_cdf(ay_ / k), gb = t2_conditional_cdf(by_ / k);
+  const auto [ay, by] = y_window(x);
+  const double ga = t2_conditional_cdf(ay / k), gb = t2_conditional_cdf(by / k);
+  if (!(gb > ga)) return {{x, 0}, 0};  // the ellipse's chord at its very end: measure zero
   const double tt = t2_conditional_inverse(ga + u1 * (gb - ga)), q = 1 + tt * tt;
-  const Vec2 t{std::clamp(c_.x + s_.x * zx, -hx_, hx_), std::clamp(c_.y + s_.y * k * tt, -hy_, hy_)};
-  return {t, inv_area_scale_ / (k2 * k2 * q * q * (gb - ga))};
+  const double y = std::clamp(c_.y + s_.y * k * tt, c_.y + s_.y * ay, c_.y + s_.y * by);
+  return {{x, y}, inv_area_scale_ / (k2 * k2 * q * q * (gb - ga))};
 }
 
 double LobeSampler::pdf(Vec2 t) const noexcept {
-  if (std::abs(t.x) > hx_ || std::abs(t.y) > hy_) return 0;
+  if (std::abs(t.x) > ap_.tx || !ap_.contains_tangent(t)) return 0;
   const double zx = (t.x - c_.x) / s_.x, zy = (t.y - c_.y) / s_.y;
   const double k2 = 1 + zx * zx, k = std::sqrt(k2);
-  const double dg = t2_conditional_cdf(by_ / k) - t2_conditional_cdf(ay_ / k);
+  const auto [ay, by] = y_window(t.x);
+  const double dg = t2_conditional_cdf(by / k) - t2_conditional_cdf(ay / k);
+  if (!(dg > 0)) return 0;
   const double tt = zy / k, q = 1 + tt * tt;
   // (1 + zx²)^(−3/2) / ΔF · (1 + t²)⁻² / (k ΔG), per unit tangent area.
   return inv_area_scale_ / (k2 * k2 * q * q * dg);

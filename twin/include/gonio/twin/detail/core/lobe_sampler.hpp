@@ -19,6 +19,9 @@
 // f / p is then nearly constant over the lobe, and smooth — what randomised QMC needs.
 #pragma once
 
+#include <utility>
+
+#include "gonio/twin/detail/core/optics.hpp"
 #include "gonio/twin/vec.hpp"
 
 namespace gonio::twin::detail {
@@ -29,13 +32,13 @@ double t2_conditional_inverse(double g) noexcept;
 
 class LobeSampler {
  public:
-  // `centre` and `scale` in tangent units; the aperture is |x| ≤ half.x, |y| ≤ half.y.
-  // Scales must be positive.
-  LobeSampler(Vec2 centre, Vec2 scale, Vec2 half) noexcept;
+  // `centre` and `scale` in tangent units; scales must be positive. For an elliptical
+  // aperture the conditional is truncated to the ellipse's chord at the drawn x.
+  LobeSampler(Vec2 centre, Vec2 scale, const Aperture& aperture) noexcept;
 
   struct Draw {
     Vec2 t;      // tangent-plane point, always inside the aperture
-    double pdf;  // its density per unit tangent area
+    double pdf;  // its density per unit tangent area (0 only on a set of measure zero)
   };
   // The draw for uniforms (u0, u1) in [0, 1)².
   Draw sample(double u0, double u1) const noexcept;
@@ -45,12 +48,13 @@ class LobeSampler {
   bool usable() const noexcept { return df_ > 1e-9 && dgy_ > 1e-9; }
 
  private:
+  std::pair<double, double> y_window(double x) const noexcept;
+
   Vec2 c_, s_;
-  double ay_ = 0, by_ = 0;         // the aperture's y bounds in z units
+  Aperture ap_;
   double fa_ = 0, df_ = 0;         // F(ax) and F(bx) − F(ax), F(z) = z / √(1 + z²)
-  double hx_ = 0, hy_ = 0;         // the aperture's half widths
   double inv_area_scale_ = 0;      // 1 / (sx · sy · ΔF)
-  double dgy_ = 0;                 // ΔG of the y window at zx = 0
+  double dgy_ = 0;                 // ΔG of the y window at the x-marginal's median
 };
 
 }  // namespace gonio::twin::detail
