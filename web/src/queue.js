@@ -20,7 +20,9 @@ export function SubmitForm({ samples, call, onSubmitted }) {
     adaptive: 'off', model: '', target_rel_u: '0.02', tolerance: '0.01', max_points: '40' });
   const [errors, setErrors] = useState({});
   const [busy, setBusy] = useState(false);
-  const set = (k) => (e) => setForm({ ...form, [k]: e.currentTarget.value });
+  // A functional update: inputs that arrive before the next render (fast typing, a form
+  // filled by a script) each build on the latest state, not on the render's copy.
+  const set = (k) => (e) => { const v = e.currentTarget.value; setForm((f) => ({ ...f, [k]: v })); };
   const sample = form.sample || (samples[0] ? String(samples[0].id) : '');
   const submit = async (e) => {
     e.preventDefault();

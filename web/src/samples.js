@@ -12,7 +12,7 @@ export function SamplesPanel({ samples, role, call, onCreated }) {
   const [errors, setErrors] = useState({});
   const [preview, setPreview] = useState(null);
   const [busy, setBusy] = useState(false);
-  const set = (k) => (e) => setForm({ ...form, [k]: e.currentTarget.value });
+  const set = (k) => (e) => { const v = e.currentTarget.value; setForm((f) => ({ ...f, [k]: v })); }; // on the latest state
   const run = async (what) => {
     setBusy(true);
     try {

@@ -89,6 +89,9 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify, fitted = null
   const [thetaI, setThetaI] = useState(null);
   const [log, setLog] = useState(false);
   const [picked, setPicked] = useState(null);
+  // What is typed in the point box until it is committed: points arriving re-render the
+  // view, and a box bound to the picked point alone would lose the typing.
+  const [draft, setDraft] = useState(null);
   const [version, setVersion] = useState(0); // bumps when the point set is reloaded
   const store = useRef({ points: new Map(), candidates: null, track: new AdaptiveTrack() });
   const live = useRef(new LivePlots());
@@ -102,6 +105,7 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify, fitted = null
     const track = new AdaptiveTrack();
     store.current = { points, candidates: null, track };
     setPicked(null);
+    setDraft(null);
     const take = (p) => {
       if (p.scan_id !== scanId || points.has(p.index)) return;
       points.set(p.index, p);
@@ -166,7 +170,7 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify, fitted = null
     store.current.fitted = fitted;
     const width = Math.max(320, hostEl.current.clientWidth || 640);
     const marks = scan.plan.adaptive ? () => candidateMarks(store.current.candidates, [...store.current.points.values()], curve.thetaI) : null;
-    const beta = betaPlot(betaEl.current, curve, { log, width, height: 300, fitted, marks, onPick: (i) => setPicked(store.current.points.get(i) || null) });
+    const beta = betaPlot(betaEl.current, curve, { log, width, height: 300, fitted, marks, onPick: (i) => { setPicked(store.current.points.get(i) || null); setDraft(null); } });
     const lane = lanePlot(laneEl.current, curve, { zThreshold: thresholds && thresholds.z_threshold, dEThreshold: thresholds && thresholds.delta_e_threshold, width, height: 170 });
     live.current.beta = beta;
     live.current.lane = lane;
@@ -198,8 +202,9 @@ export function ScanPanel({ scanId, call, bus, thresholds, notify, fitted = null
       ${incs.length > 1 && html`<label>θi <select value=${thetaI} onChange=${(e) => setThetaI(Number(e.currentTarget.value))}>
         ${incs.map((t) => html`<option value=${t}>${t}°</option>`)}</select></label>`}
       <label><input type="checkbox" checked=${log} onChange=${(e) => setLog(e.currentTarget.checked)} data-testid="plot-log" /> log β</label>
-      <label>point <input class="point-index" type="number" min="0" value=${picked ? picked.index : ''} data-testid="point-index"
-        aria-label="show the point with this index" onChange=${(e) => setPicked(store.current.points.get(Number(e.currentTarget.value)) || null)} /></label>
+      <label>point <input class="point-index" type="number" min="0" value=${draft ?? (picked ? picked.index : '')} data-testid="point-index"
+        aria-label="show the point with this index" onInput=${(e) => setDraft(e.currentTarget.value)}
+        onChange=${(e) => { setPicked(store.current.points.get(Number(e.currentTarget.value)) || null); setDraft(null); }} /></label>
       <span class="exports">Export:
         ${['csv', 'json', 'bsdf', 'ssdd'].map((f) => html` <button data-testid=${`export-${f}`} onClick=${() => exp(f)}>${f}</button>`)}</span>
     </div>

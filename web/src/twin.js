@@ -10,7 +10,7 @@ export function TwinPanel({ call }) {
   const [result, setResult] = useState(null);
   const [nm, setNm] = useState(550);
   const [busy, setBusy] = useState(false);
-  const set = (k) => (e) => setForm({ ...form, [k]: e.currentTarget.value });
+  const set = (k) => (e) => { const v = e.currentTarget.value; setForm((f) => ({ ...f, [k]: v })); }; // on the latest state
   const run = async (e) => {
     e.preventDefault();
     setBusy(true);
