@@ -1,7 +1,7 @@
 // The queue: the running scan and the waiting ones (queued, paused, interrupted) with their actions,
 // and the submit form, whose API errors are shown at the field they name.
 import { useState } from 'preact/hooks';
-import { html, Field } from './ui.js';
+import { html, Field, setter } from './ui.js';
 import { can, describeError, scanActions, submitFieldOf, submitParams } from './logic.js';
 
 const FIELDS = ['sample', 'name', 'grids', 'geometries', 'wavelengths', 'repeats', 'reference', 'priority',
@@ -20,9 +20,7 @@ export function SubmitForm({ samples, call, onSubmitted }) {
     adaptive: 'off', model: '', target_rel_u: '0.02', tolerance: '0.01', max_points: '40' });
   const [errors, setErrors] = useState({});
   const [busy, setBusy] = useState(false);
-  // A functional update: inputs that arrive before the next render (fast typing, a form
-  // filled by a script) each build on the latest state, not on the render's copy.
-  const set = (k) => (e) => { const v = e.currentTarget.value; setForm((f) => ({ ...f, [k]: v })); };
+  const set = setter(setForm);
   const sample = form.sample || (samples[0] ? String(samples[0].id) : '');
   const submit = async (e) => {
     e.preventDefault();

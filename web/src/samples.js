@@ -1,6 +1,6 @@
 // The sample catalog; technicians create samples and see the twin's predicted curve first.
 import { useState } from 'preact/hooks';
-import { html, Field, fieldErrors, PlotHost } from './ui.js';
+import { html, Field, setter, fieldErrors, PlotHost } from './ui.js';
 import { can, fmt } from './logic.js';
 import { predictionColumns, predictionPlot } from './plot.js';
 
@@ -12,7 +12,7 @@ export function SamplesPanel({ samples, role, call, onCreated }) {
   const [errors, setErrors] = useState({});
   const [preview, setPreview] = useState(null);
   const [busy, setBusy] = useState(false);
-  const set = (k) => (e) => { const v = e.currentTarget.value; setForm((f) => ({ ...f, [k]: v })); }; // on the latest state
+  const set = setter(setForm);
   const run = async (what) => {
     setBusy(true);
     try {

@@ -1,6 +1,6 @@
 // The twin playground: a BSDF spec, a geometry grid and wavelengths → β with its s.e.
 import { useState } from 'preact/hooks';
-import { html, Field, fieldErrors, PlotHost } from './ui.js';
+import { html, Field, setter, fieldErrors, PlotHost } from './ui.js';
 import { channelOf, fmt } from './logic.js';
 import { predictionColumns, predictionPlot } from './plot.js';
 
@@ -10,7 +10,7 @@ export function TwinPanel({ call }) {
   const [result, setResult] = useState(null);
   const [nm, setNm] = useState(550);
   const [busy, setBusy] = useState(false);
-  const set = (k) => (e) => { const v = e.currentTarget.value; setForm((f) => ({ ...f, [k]: v })); }; // on the latest state
+  const set = setter(setForm);
   const run = async (e) => {
     e.preventDefault();
     setBusy(true);

@@ -6,6 +6,14 @@ import { describeError } from './logic.js';
 
 export const html = htm.bind(h);
 
+// onInput handlers for a form held in one state object: `setter(setForm)(key)`. A functional
+// update, so that inputs arriving before the next render (fast typing, a form filled by a
+// script) each build on the latest state, not on the render's copy.
+export const setter = (setForm) => (k) => (e) => {
+  const v = e.currentTarget.value;
+  setForm((f) => ({ ...f, [k]: v }));
+};
+
 // A labelled input whose API error (error.data.field) is shown beneath it.
 export function Field({ name, label, error, children, hint }) {
   const id = `f-${name}`;
