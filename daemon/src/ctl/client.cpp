@@ -13,6 +13,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <iterator>
 
 #include <fmt/format.h>
 
@@ -107,12 +108,11 @@ Client::~Client() {
 
 Client::Client(Client&& o) noexcept
     : fd_(o.fd_), uri_(std::move(o.uri_)), timeout_(o.timeout_), buffer_(std::move(o.buffer_)),
-      notifications_(std::move(o.notifications_)), next_id_(o.next_id_) {
+      consumed_(o.consumed_), notifications_(std::move(o.notifications_)), next_id_(o.next_id_) {
   o.fd_ = -1;
 }
 
-void Client::send_line(const std::string& line) {
-  std::string data = line + "\n";
+void Client::send_all(std::string_view data) {
   std::size_t off = 0;
   while (off < data.size()) {
     const auto n = ::send(fd_, data.data() + off, data.size() - off, MSG_NOSIGNAL);
@@ -124,14 +124,21 @@ void Client::send_line(const std::string& line) {
   }
 }
 
-std::optional<std::string> Client::read_line(std::chrono::milliseconds timeout) {
+void Client::send_line(const std::string& line) { send_all(line + "\n"); }
+
+std::optional<std::string_view> Client::next_line(std::chrono::milliseconds timeout) {
   const auto deadline = Clock::now() + timeout;
-  for (;;) {
-    if (const auto nl = buffer_.find('\n'); nl != std::string::npos) {
-      std::string line = buffer_.substr(0, nl);
-      buffer_.erase(0, nl + 1);
+  if (consumed_ == buffer_.size() || consumed_ > 65536) {  // the previous line's view ends here
+    buffer_.erase(0, consumed_);
+    consumed_ = 0;
+  }
+  for (std::size_t searched = consumed_;;) {
+    if (const auto nl = buffer_.find('\n', searched); nl != std::string::npos) {
+      const std::string_view line(buffer_.data() + consumed_, nl - consumed_);
+      consumed_ = nl + 1;
       return line;
     }
+    searched = buffer_.size();
     pollfd p{fd_, POLLIN, 0};
     const int rc = ::poll(&p, 1, remaining_ms(deadline));
     if (rc < 0 && errno == EINTR) continue;
@@ -146,32 +153,35 @@ std::optional<std::string> Client::read_line(std::chrono::milliseconds timeout) 
   }
 }
 
+std::optional<std::string> Client::read_line(std::chrono::milliseconds timeout) {
+  const auto line = next_line(timeout);
+  if (!line) return std::nullopt;
+  return std::string(*line);
+}
+
 json Client::call(const std::string& method, const json& params) {
   const auto id = next_id_++;
-  send_line(json{{"jsonrpc", "2.0"}, {"id", id}, {"method", method}, {"params", params}}.dump());
+  out_.clear();
+  fmt::format_to(std::back_inserter(out_), R"({{"jsonrpc":"2.0","id":{},"method":{},"params":{}}})"
+                 "\n", id, json(method).dump(), params.dump());
+  send_all(out_);
   const auto deadline = Clock::now() + timeout_;
   for (;;) {
-    const auto line = read_line(std::chrono::milliseconds(remaining_ms(deadline)));
+    const auto line = next_line(std::chrono::milliseconds(remaining_ms(deadline)));
     if (!line) throw ConnectionError(fmt::format("{}: no answer to {} within {} s", uri_, method,
                                                  timeout_.count() / 1000.0));
-    json msg = json::parse(*line, nullptr, false);
+    json msg = json::parse(line->begin(), line->end(), nullptr, false);
     if (msg.is_discarded()) throw ConnectionError(fmt::format("{}: unreadable reply", uri_));
-    if (!msg.contains("id")) {
+    const auto it = msg.find("id");
+    if (it == msg.end()) {
       notifications_.push_back(std::move(msg));
       continue;
     }
-    if (msg["id"] != json(id)) {
-      if (msg["id"].is_null() && msg.contains("error")) {
-        const auto& e = msg["error"];
-        throw RpcError(e.value("code", 0), e.value("message", ""), e.value("data", json::object()));
-      }
-      continue;  // an answer to something else
-    }
-    if (msg.contains("error")) {
-      const auto& e = msg["error"];
-      throw RpcError(e.value("code", 0), e.value("message", ""), e.value("data", json::object()));
-    }
-    return msg["result"];
+    const bool ours = it->is_number_integer() && it->get<std::int64_t>() == id;
+    if (!ours && !(it->is_null() && msg.contains("error"))) continue;  // an answer to something else
+    if (const auto e = msg.find("error"); e != msg.end())
+      throw RpcError(e->value("code", 0), e->value("message", ""), e->value("data", json::object()));
+    return std::move(msg["result"]);
   }
 }
 
@@ -185,9 +195,9 @@ std::optional<json> Client::next_notification(std::chrono::milliseconds timeout)
   }
   const auto deadline = Clock::now() + timeout;
   for (;;) {
-    const auto line = read_line(std::chrono::milliseconds(remaining_ms(deadline)));
+    const auto line = next_line(std::chrono::milliseconds(remaining_ms(deadline)));
     if (!line) return std::nullopt;
-    json msg = json::parse(*line, nullptr, false);
+    json msg = json::parse(line->begin(), line->end(), nullptr, false);
     if (msg.is_discarded()) continue;
     if (!msg.contains("id")) return msg;
   }

@@ -12,6 +12,7 @@
 
 #include "gonio/daemon/rpc/governor.hpp"
 #include "gonio/proto/error.hpp"
+#include "gonio/proto/json_writer.hpp"
 #include "gonio/proto/text.hpp"
 #include "gonio/registry/registry.hpp"
 #include "instrument/run.hpp"
@@ -345,21 +346,25 @@ json Instrument::status() const {
   };
 }
 
-json Instrument::stats() const {
+std::string Instrument::stats_text() const {
   std::lock_guard lock(mu_);
   // system.info is polled far more often than points are measured.
   if (stats_cache_ && stats_cache_->first == points_measured_) return stats_cache_->second;
   std::vector<double> v(overhead_ms_.begin(), overhead_ms_.end());
   std::sort(v.begin(), v.end());
-  const auto q = [&](double f) {
-    return v.empty() ? json(nullptr)
-                     : json(v[std::min(v.size() - 1, static_cast<std::size_t>(f * static_cast<double>(v.size())))]);
+  const auto q = [&](double f) -> std::optional<double> {
+    if (v.empty()) return std::nullopt;
+    return v[std::min(v.size() - 1, static_cast<std::size_t>(f * static_cast<double>(v.size())))];
   };
-  json out{{"points_measured", points_measured_},
-           {"overhead_ms_p50", q(0.5)},
-           {"overhead_ms_p99", q(0.99)},
-           {"overhead_ms_max", v.empty() ? json(nullptr) : json(v.back())},
-           {"overhead_window", v.size()}};
+  std::string out;
+  JsonWriter(out)
+      .begin_object()
+      .member("points_measured", points_measured_)
+      .member("overhead_ms_p50", q(0.5))
+      .member("overhead_ms_p99", q(0.99))
+      .member("overhead_ms_max", v.empty() ? std::nullopt : std::optional<double>(v.back()))
+      .member("overhead_window", v.size())
+      .end_object();
   stats_cache_ = std::make_pair(points_measured_, out);
   return out;
 }

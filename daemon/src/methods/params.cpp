@@ -137,6 +137,10 @@ Scan require_scan(const Store& store, std::int64_t id) {
 
 std::string actor(const rpc::Call& c) { return c.principal.name; }
 
+void write_principal(JsonWriter& w, const Principal& p) {
+  w.member("name", p.name).member("role", to_text(p.role)).member("transport", p.transport);
+}
+
 json principal_json(const Principal& p) {
   return json{{"name", p.name}, {"role", to_text(p.role)}, {"transport", p.transport}};
 }

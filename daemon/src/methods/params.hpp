@@ -13,6 +13,7 @@
 #include "gonio/daemon/rpc/rpc.hpp"
 #include "gonio/daemon/store/store.hpp"
 #include "gonio/proto/json_util.hpp"
+#include "gonio/proto/json_writer.hpp"
 
 namespace gonio::daemon::methods {
 
@@ -43,6 +44,8 @@ std::string confine_bsdf_files(const std::string& spec, const std::filesystem::p
 // Who is calling, as written to the audit log.
 std::string actor(const rpc::Call& c);
 nlohmann::json principal_json(const Principal& p);
+// The same members, written into an open object.
+void write_principal(JsonWriter& w, const Principal& p);
 // A scan without its geometries.
 nlohmann::json scan_summary(const Scan& s);
 

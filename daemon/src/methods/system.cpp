@@ -75,8 +75,8 @@ std::size_t resident_bytes() {
 
 void register_system(MethodRegistrar& reg, Services& s) {
   // system.info is what monitors poll: the members fixed at start are serialised once, the
-  // others are written straight to text (no JSON tree per call). Members come in no
-  // particular order.
+  // others are written straight to text by a JsonWriter (no JSON tree per call). Members
+  // come in no particular order.
   const auto fixed = [&s] {
     std::string t = json{{"name", "goniod"},
                          {"version", proto::kVersion},
@@ -90,38 +90,54 @@ void register_system(MethodRegistrar& reg, Services& s) {
                                          {"delta_uv_threshold", s.config.delta_uv_threshold},
                                          {"reference_drift", s.config.reference_drift}}}}
                         .dump();
-    t.back() = ',';  // the closing brace comes after the live members
+    t.pop_back();  // the closing brace comes after the live members
     return t;
   }();
-  const auto twin_fixed =
-      fmt::format(R"("version":{},"threads":{})", json(s.twin.version()).dump(), s.twin.threads());
-  reg.add("system.info", [&s, fixed, twin_fixed](rpc::Call& c) {
+  const auto twin_version = json(s.twin.version()).dump();
+  const auto twin_threads = s.twin.threads();
+  reg.add("system.info", [&s, fixed, twin_version, twin_threads](rpc::Call& c) {
     ObjectReader(c.params, "").finish();
     const auto uptime = std::chrono::duration<double>(std::chrono::steady_clock::now() - s.started).count();
-    const auto running = s.instrument.running_scan();
     std::string out;
     out.reserve(fixed.size() + 1024);
     out += fixed;
-    fmt::format_to(std::back_inserter(out),
-                   R"("uptime_s":{},"running_scan":{},"rss_bytes":{},"rpc":{{"requests":{},"errors":{}}},)"
-                   R"("subscribers":{},"notifications_dropped":{},"runner":{},)"
-                   R"("twin":{{{},"queued":{}}},"you":{})",
-                   uptime, running ? std::to_string(*running) : "null", sampled_resident_bytes(),
-                   s.dispatcher ? s.dispatcher->requests() : 0, s.dispatcher ? s.dispatcher->errors() : 0,
-                   s.hub.sessions(), s.hub.dropped(), s.instrument.stats().dump(), twin_fixed,
-                   s.twin.queued(), methods::principal_json(c.principal).dump());
+    JsonWriter w(out);
+    w.member("uptime_s", uptime)
+        .member("running_scan", s.instrument.running_scan())
+        .member("rss_bytes", sampled_resident_bytes())
+        .begin_object("rpc")
+        .member("requests", s.dispatcher ? s.dispatcher->requests() : 0)
+        .member("errors", s.dispatcher ? s.dispatcher->errors() : 0)
+        .end_object()
+        .member("subscribers", s.hub.sessions())
+        .member("notifications_dropped", s.hub.dropped())
+        .raw_member("runner", s.instrument.stats_text())
+        .begin_object("twin")
+        .raw_member("version", twin_version)
+        .member("threads", twin_threads)
+        .member("queued", s.twin.queued())
+        .end_object()
+        .begin_object("you");
+    methods::write_principal(w, c.principal);
+    w.end_object();
     if (auto sink = s.alerts.sink()) {
       auto hook = sink->stats();
       // The URL may carry a path or a query meant as a secret: only admins see it whole.
       if (c.principal.role < Role::admin && hook.contains("url")) hook["url"] = webhook_host(hook["url"]);
-      (out += R"(,"webhook":)") += hook.dump();
+      w.raw_member("webhook", hook.dump());
     }
-    if (s.mqtt) (out += R"(,"mqtt":)") += s.mqtt->status().dump();
-    if (s.archive) (out += R"(,"archive":)") += s.archive->status().dump();
-    if (s.transport_stats) (out += R"(,"transport":)") += s.transport_stats().dump();
-    if (s.net_stats) (out += R"(,"net":)") += s.net_stats().dump();
-    if (s.governor_stats) (out += R"(,"governor":)") += s.governor_stats().dump();
-    out += '}';
+    if (s.mqtt) w.raw_member("mqtt", s.mqtt->status().dump());
+    if (s.archive) w.raw_member("archive", s.archive->status().dump());
+    const auto section = [&w](std::string_view key, const auto& write, bool array) {
+      if (!write) return;
+      array ? w.begin_array(key) : w.begin_object(key);
+      write(w);
+      array ? w.end_array() : w.end_object();
+    };
+    section("transport", s.transport_stats, true);
+    section("net", s.net_stats, false);
+    section("governor", s.governor_stats, false);
+    w.end_object();
     return rpc::RawJson{std::move(out)};
   });
 

@@ -585,12 +585,12 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
     }
   }
 
-  json stats() const override {
-    return json{{"endpoint", endpoint_},
-                {"connections", st_->connections.load()},
-                {"websockets", st_->websockets.load()},
-                {"accepted", st_->accepted.load()},
-                {"dropped", st_->dropped.load()}};
+  void write_stats(JsonWriter& w) const override {
+    w.member("endpoint", endpoint_)
+        .member("connections", st_->connections.load())
+        .member("websockets", st_->websockets.load())
+        .member("accepted", st_->accepted.load())
+        .member("dropped", st_->dropped.load());
   }
 
  private:

@@ -419,11 +419,11 @@ class NdjsonListener final : public Listener,
       if (auto s = w.lock()) std::static_pointer_cast<NdjsonSession<Protocol>>(s)->shutdown();
   }
 
-  json stats() const override {
-    return json{{"endpoint", endpoint_},
-                {"connections", ls_->connections.load()},
-                {"accepted", ls_->accepted.load()},
-                {"dropped", ls_->dropped.load()}};
+  void write_stats(JsonWriter& w) const override {
+    w.member("endpoint", endpoint_)
+        .member("connections", ls_->connections.load())
+        .member("accepted", ls_->accepted.load())
+        .member("dropped", ls_->dropped.load());
   }
 
  private:

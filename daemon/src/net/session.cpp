@@ -38,15 +38,15 @@ Limits Limits::from(const Config& c) {
   return l;
 }
 
-json NetStats::to_json() const {
-  return json{{"buffered_bytes", buffered_bytes.load()},
-              {"slow_readers_dropped", slow_readers.load()},
-              {"login_timeouts", login_timeouts.load()},
-              {"refused_origin", refused_origin.load()},
-              {"refused_content_type", refused_content_type.load()},
-              {"accept_backoffs", accept_backoffs.load()},
-              {"overload_dropped", overload_dropped.load()},
-              {"revoked_sessions_ended", revoked_sessions.load()}};
+void NetStats::write(JsonWriter& w) const {
+  w.member("buffered_bytes", buffered_bytes.load())
+      .member("slow_readers_dropped", slow_readers.load())
+      .member("login_timeouts", login_timeouts.load())
+      .member("refused_origin", refused_origin.load())
+      .member("refused_content_type", refused_content_type.load())
+      .member("accept_backoffs", accept_backoffs.load())
+      .member("overload_dropped", overload_dropped.load())
+      .member("revoked_sessions_ended", revoked_sessions.load());
 }
 
 bool OutputQueue::admit(const std::string& m, std::size_t extra_messages) {

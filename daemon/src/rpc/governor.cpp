@@ -198,16 +198,24 @@ void ClientGovernor::sample_loop() {
   }
 }
 
-nlohmann::json ClientGovernor::stats() const {
+void ClientGovernor::write_stats(JsonWriter& w) const {
   std::lock_guard lock(mu_);
-  return nlohmann::json{{"holding", holding_.load()},
-                        {"busy_share", settings_.busy_share},
-                        {"ticks_held", ticks_held_},
-                        {"client_cpu_s", 1e-9 * static_cast<double>(client_total_ns_)},
-                        {"measurement_wait_s", 1e-9 * static_cast<double>(measurement_wait_total_ns_)},
-                        {"measurement_threads", measurement_threads_},
-                        {"client_threads", client_threads_},
-                        {"network_threads", network_threads_}};
+  w.member("holding", holding_.load())
+      .member("busy_share", settings_.busy_share)
+      .member("ticks_held", ticks_held_)
+      .member("client_cpu_s", 1e-9 * static_cast<double>(client_total_ns_))
+      .member("measurement_wait_s", 1e-9 * static_cast<double>(measurement_wait_total_ns_))
+      .member("measurement_threads", measurement_threads_)
+      .member("client_threads", client_threads_)
+      .member("network_threads", network_threads_);
+}
+
+nlohmann::json ClientGovernor::stats() const {
+  std::string text = "{";
+  JsonWriter w(text);
+  write_stats(w);
+  w.end_object();
+  return nlohmann::json::parse(text);
 }
 
 }  // namespace gonio::daemon::rpc

@@ -515,19 +515,21 @@ int run_daemon(const DaemonOptions& o) {
     Services services{config,     state,     *store,   auth,
                       hub,        twin,      alerts,   instrument,
                       &dispatcher, std::chrono::steady_clock::now(), utc::now(),
-                      [&listeners] {
-                        json out = json::array();
-                        for (const auto& l : listeners) out.push_back(l->stats());
-                        return out;
+                      [&listeners](JsonWriter& w) {
+                        for (const auto& l : listeners) {
+                          w.begin_object();
+                          l->write_stats(w);
+                          w.end_object();
+                        }
                       },
-                      [&net_stats] { return net_stats.to_json(); },
+                      [&net_stats](JsonWriter& w) { net_stats.write(w); },
                       [&listeners](const std::string& name) {
                         for (const auto& l : listeners) l->end_sessions_of(name);
                       },
                       config.twin_data_dir.empty() ? state / "data" : fs::path(config.twin_data_dir),
                       telemetry.archive.get(),
                       telemetry.mqtt.get(),
-                      [&governor] { return governor.stats(); }};
+                      [&governor](JsonWriter& w) { governor.write_stats(w); }};
     register_methods(dispatcher, services);
 
     const net::Context ctx{dispatcher, hub, auth, net::Limits::from(config), net_stats, load_dashboard(config)};

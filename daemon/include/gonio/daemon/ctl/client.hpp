@@ -11,6 +11,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 #include <nlohmann/json.hpp>
 
@@ -61,10 +62,18 @@ class Client {
   std::optional<std::string> read_line(std::chrono::milliseconds timeout);
 
  private:
+  void send_all(std::string_view data);
+  // The next line, valid until the next read; nullopt after `timeout` without one.
+  std::optional<std::string_view> next_line(std::chrono::milliseconds timeout);
+
   int fd_ = -1;
   std::string uri_;
   std::chrono::milliseconds timeout_;
+  // Received bytes; those before consumed_ are lines already returned. Kept (with its
+  // capacity) across calls, as is out_: a round trip allocates nothing for its text.
   std::string buffer_;
+  std::size_t consumed_ = 0;
+  std::string out_;
   std::deque<nlohmann::json> notifications_;
   std::int64_t next_id_ = 1;
 };

@@ -106,9 +106,9 @@ class Instrument {
   // Any thread, immediate: stops every axis and pauses the running scan.
   nlohmann::json stop(const std::string& actor);
 
-  // Runner statistics for system.info: points measured since start and the daemon's own
-  // time per point (excluding motion, photometer and twin), in ms.
-  nlohmann::json stats() const;
+  // Runner statistics for system.info, as JSON object text: points measured since start and
+  // the daemon's own time per point (excluding motion, photometer and twin), in ms.
+  std::string stats_text() const;
   // Last sign of progress of the runner thread: a turn of its loop or the start of a device
   // call or of a wait for the twin (for the systemd watchdog).
   std::chrono::steady_clock::time_point heartbeat() const;
@@ -266,7 +266,7 @@ class Instrument {
   std::uint64_t points_measured_ = 0;
   nlohmann::json adaptive_status_;  // of the running adaptive scan (null otherwise)
   std::deque<double> overhead_ms_;  // the last 1000 points
-  mutable std::optional<std::pair<std::uint64_t, nlohmann::json>> stats_cache_;  // per points_measured_
+  mutable std::optional<std::pair<std::uint64_t, std::string>> stats_cache_;  // per points_measured_
 };
 
 }  // namespace gonio::daemon

@@ -18,6 +18,7 @@
 #include "gonio/daemon/rpc/auth.hpp"
 #include "gonio/daemon/rpc/hub.hpp"
 #include "gonio/daemon/rpc/rpc.hpp"
+#include "gonio/proto/json_writer.hpp"
 #include "gonio/daemon/store/store.hpp"
 
 namespace gonio::daemon {
@@ -38,13 +39,14 @@ struct Services {
   const rpc::Dispatcher* dispatcher = nullptr;
   std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();
   std::string started_at;
-  std::function<nlohmann::json()> transport_stats;  // connections, listeners
-  std::function<nlohmann::json()> net_stats;        // budgets and dropped peers (net::NetStats)
+  // system.info's live members, written into an open array or object (JsonWriter).
+  std::function<void(JsonWriter&)> transport_stats;  // one object per listener
+  std::function<void(JsonWriter&)> net_stats;        // budgets and dropped peers (net::NetStats)
   std::function<void(const std::string&)> end_sessions_of;  // a token was revoked
   std::filesystem::path data_dir;  // where BSDF specs' '@file' names may point (twin.data_dir)
   ArchiveShipper* archive = nullptr;  // null: no [archive]
   MqttPublisher* mqtt = nullptr;      // null: no [mqtt]
-  std::function<nlohmann::json()> governor_stats;  // the client governor (rpc/governor.hpp)
+  std::function<void(JsonWriter&)> governor_stats;  // the client governor (rpc/governor.hpp)
 };
 
 void register_methods(rpc::Dispatcher& d, Services& s);

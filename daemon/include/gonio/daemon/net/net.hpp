@@ -39,6 +39,7 @@
 #include "gonio/daemon/rpc/auth.hpp"
 #include "gonio/daemon/rpc/hub.hpp"
 #include "gonio/daemon/rpc/rpc.hpp"
+#include "gonio/proto/json_writer.hpp"
 
 namespace boost::asio {
 class io_context;
@@ -77,7 +78,7 @@ struct NetStats {
   std::atomic<std::uint64_t> accept_backoffs{0};     // accept() out of file descriptors
   std::atomic<std::uint64_t> overload_dropped{0};    // dropped mid-message: the shared budget was full
   std::atomic<std::uint64_t> revoked_sessions{0};    // ended because their token was revoked
-  nlohmann::json to_json() const;
+  void write(JsonWriter& w) const;  // the members of system.info's "net"
 };
 
 struct Context {
@@ -94,7 +95,9 @@ class Listener {
   virtual ~Listener() = default;
   virtual std::string endpoint() const = 0;  // the bound URI (real port when 0 was asked)
   virtual void close() = 0;                  // stops accepting and closes every connection
-  virtual nlohmann::json stats() const = 0;  // {"endpoint", "connections", "accepted", "dropped"}
+  // The members of its system.info "transport" entry: endpoint, connections, accepted,
+  // dropped (and websockets on HTTP).
+  virtual void write_stats(JsonWriter& w) const = 0;
   // Ends every live session logged in with the token `name` (it was revoked).
   virtual void end_sessions_of(const std::string& name) = 0;
 };

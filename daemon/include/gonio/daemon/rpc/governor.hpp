@@ -27,6 +27,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "gonio/proto/json_writer.hpp"
+
 namespace gonio::daemon::rpc {
 
 // The kernel's account of one thread: time on a CPU and time runnable but waiting for one
@@ -84,8 +86,10 @@ class ClientGovernor {
   void observe(const Tick& t);
   void stop();
 
-  // system.info: {holding, busy_share, ticks_held, client_cpu_s, measurement_wait_s,
-  // measurement_threads, client_threads, network_threads}.
+  // system.info's "governor": {holding, busy_share, ticks_held, client_cpu_s,
+  // measurement_wait_s, measurement_threads, client_threads, network_threads}. write_stats
+  // writes the members into an open object; stats() is the same as a tree.
+  void write_stats(JsonWriter& w) const;
   nlohmann::json stats() const;
 
  private:
