@@ -9,8 +9,13 @@
 //   echo         a line echoed by an in-process epoll server (no JSON-RPC work at all)
 //   system.info  goniod's cheapest method that touches every service
 //   scan.points  a page of 10 stored points of the running scan (SQLite read + JSON)
-// It prints p50 / p99 / max latency, throughput and errors per target, goniod's resident
-// memory and the scan runner's own time per point (excluding motion, photometer and twin).
+// It prints p50 / p99 / max latency, throughput and errors per target, the server's own CPU
+// time per request (the echo thread's; goniod's, less what it spends with no client, the
+// running scan's), goniod's resident memory and the scan runner's own time per point
+// (excluding motion, photometer and twin). The clients check each answer's id and error
+// without building it (Client::call_checked), so that their own allocation of 64 answer
+// trees on the same cores is not what is measured; --parse-replies parses every answer whole,
+// as gonioctl does.
 // Wall times are measured, never asserted.
 //
 // --hostile adds what an attacker (or a clumsy script) does, against a goniod it started
@@ -27,6 +32,7 @@
 #include <netinet/in.h>
 #include <signal.h>
 #include <sys/resource.h>
+#include <pthread.h>
 #include <sys/epoll.h>
 #include <sys/socket.h>
 #include <sys/time.h>
@@ -42,6 +48,7 @@
 #include <iostream>
 #include <map>
 #include <optional>
+#include <sstream>
 #include <thread>
 #include <vector>
 
@@ -60,10 +67,13 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-// A line echo server on 127.0.0.1 (ephemeral port), one epoll thread.
+// A line echo server on 127.0.0.1 (ephemeral port), one epoll thread. Given a result, it
+// replays instead: each request line gets {"jsonrpc":"2.0","id":ID,"result":RESULT}, its own
+// id and always the same result, so that the same bytes as goniod's answer cross the socket
+// and reach the client with no work behind them.
 class EchoServer {
  public:
-  EchoServer() {
+  explicit EchoServer(std::string result = {}) : result_(std::move(result)) {
     listen_fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
     sockaddr_in a{};
     a.sin_family = AF_INET;
@@ -85,6 +95,13 @@ class EchoServer {
     ::close(stop_[1]);
   }
   std::string uri() const { return fmt::format("tcp://127.0.0.1:{}", port_); }
+  // CPU time of the server thread so far.
+  double cpu_seconds() {
+    clockid_t id;
+    timespec ts{};
+    if (::pthread_getcpuclockid(thread_.native_handle(), &id) != 0 || ::clock_gettime(id, &ts) != 0) return NAN;
+    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+  }
 
  private:
   void run() {
@@ -131,11 +148,26 @@ class EchoServer {
         const auto nl = b.rfind('\n');
         if (nl == std::string::npos) continue;
         // The client waits for each answer, so a blocking send of one line is fine.
-        (void)!::send(fd, b.data(), nl + 1, MSG_NOSIGNAL);
+        if (result_.empty()) (void)!::send(fd, b.data(), nl + 1, MSG_NOSIGNAL);
+        else replay(fd, std::string_view(b).substr(0, nl + 1));
         b.erase(0, nl + 1);
       }
     }
   }
+  // Client::call_checked's requests start {"jsonrpc":"2.0","id":N,...
+  void replay(int fd, std::string_view lines) {
+    for (std::size_t start = 0, nl; (nl = lines.find('\n', start)) != std::string_view::npos; start = nl + 1) {
+      const auto line = lines.substr(start, nl - start);
+      const auto at = line.find(R"("id":)");
+      const auto id = at == std::string_view::npos ? std::string_view("null")
+                                                   : line.substr(at + 5, line.find_first_of(",}", at) - at - 5);
+      out_.clear();
+      ((((out_ += R"({"jsonrpc":"2.0","id":)") += id) += R"(,"result":)") += result_) += "}\n";
+      (void)!::send(fd, out_.data(), out_.size(), MSG_NOSIGNAL);
+    }
+  }
+
+  std::string result_, out_;
   int listen_fd_ = -1;
   int stop_[2]{-1, -1};
   std::uint16_t port_ = 0;
@@ -146,6 +178,7 @@ struct Result {
   std::string target;
   std::size_t clients = 0, requests = 0, errors = 0;
   double seconds = 0;
+  double server_cpu_s = NAN;  // the server's CPU time during the run (NAN: not known)
   std::vector<double> latency_ms;
 };
 
@@ -290,6 +323,22 @@ using Calls = std::vector<std::pair<std::string, json>>;
 // Nice increment of the client threads (--client-nice): clients on other machines take no
 // CPU from goniod; on the same machine, a positive value stands for that.
 int g_client_nice = 0;
+// --parse-replies: every answer parsed whole (Client::call) instead of checked.
+bool g_parse_replies = false;
+
+// User + system CPU time of a process so far (/proc/PID/stat, proc(5) fields 14 and 15).
+double process_cpu_seconds(pid_t pid) {
+  std::ifstream in(fmt::format("/proc/{}/stat", pid));
+  std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto close = stat.rfind(')');
+  if (close == std::string::npos) return NAN;
+  std::istringstream rest(stat.substr(close + 2));
+  std::string field;
+  double ticks = 0;
+  for (int i = 3; i <= 15 && rest >> field; ++i)
+    if (i >= 14) ticks += std::stod(field);
+  return ticks / static_cast<double>(::sysconf(_SC_CLK_TCK));
+}
 
 Result run_clients(const std::string& target, const std::string& uri, const std::string& token,
                    std::size_t clients, double seconds, const Calls& calls) {
@@ -321,7 +370,8 @@ Result run_clients(const std::string& target, const std::string& uri, const std:
       while (Clock::now() < t_end) {
         const auto t0 = Clock::now();
         try {
-          c->call(method, params);
+          if (g_parse_replies) c->call(method, params);
+          else c->call_checked(method, params);
           lat[i].push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
         } catch (const std::exception&) {
           ++errs[i];
@@ -567,17 +617,19 @@ struct Report {
 
 void print(const Report& rep, const Options& o) {
   json out = json::array();
-  gonio::daemon::Table t({"target", "clients", "requests", "req/s", "p50 ms", "p99 ms", "max ms", "errors"});
+  gonio::daemon::Table t(
+      {"target", "clients", "requests", "req/s", "p50 ms", "p99 ms", "max ms", "errors", "server µs/req"});
   for (auto r : rep.results) {
     const double p50 = quantile(r.latency_ms, 0.5), p99 = quantile(r.latency_ms, 0.99);
     const double mx = r.latency_ms.empty() ? NAN : r.latency_ms.back();
     const double rps = static_cast<double>(r.requests) / r.seconds;
+    const double server_us = 1e6 * r.server_cpu_s / static_cast<double>(r.requests);
     t.add({r.target, std::to_string(r.clients), std::to_string(r.requests), fmt::format("{:.0f}", rps),
            fmt::format("{:.3f}", p50), fmt::format("{:.3f}", p99), fmt::format("{:.3f}", mx),
-           std::to_string(r.errors)});
+           std::to_string(r.errors), std::isfinite(server_us) ? fmt::format("{:.1f}", server_us) : "-"});
     out.push_back(json{{"target", r.target}, {"clients", r.clients}, {"requests", r.requests},
                        {"throughput_rps", rps}, {"p50_ms", p50}, {"p99_ms", p99}, {"max_ms", mx},
-                       {"errors", r.errors}});
+                       {"errors", r.errors}, {"server_cpu_us_per_request", server_us}});
   }
   const auto& runner = rep.after["runner"];
   const double rss_mib = rep.after["rss_bytes"].get<double>() / (1024.0 * 1024.0);
@@ -640,15 +692,31 @@ void run(Options o) {
     const auto list = admin.call("scan.list", json{{"limit", 1}});
     if (!list.empty()) rep.scan_id = list[0]["id"].get<std::int64_t>();
   }
-  {
-    EchoServer echo;
-    rep.results.push_back(run_clients("echo (baseline)", echo.uri(), "", o.clients, o.seconds, {{"system.info", json::object()}}));
+  const auto baseline = [&](const std::string& target, std::string result) {
+    EchoServer echo(std::move(result));
+    const double cpu0 = echo.cpu_seconds();
+    rep.results.push_back(run_clients(target, echo.uri(), "", o.clients, o.seconds, {{"system.info", json::object()}}));
+    rep.results.back().server_cpu_s = echo.cpu_seconds() - cpu0;
+  };
+  baseline("echo (baseline)", {});
+  baseline("replay (system.info's bytes)", admin.call("system.info").dump());
+  // goniod's CPU with no client (the running scan's), taken off its CPU under the clients.
+  double idle_rate = NAN;
+  if (own) {
+    const double c0 = process_cpu_seconds(own->pid());
+    const auto t0 = Clock::now();
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    idle_rate = (process_cpu_seconds(own->pid()) - c0) / std::chrono::duration<double>(Clock::now() - t0).count();
   }
+  const auto measure = [&](const std::string& target, const Calls& calls) {
+    const double c0 = own ? process_cpu_seconds(own->pid()) : NAN;
+    rep.results.push_back(run_clients(target, uri, token, o.clients, o.seconds, calls));
+    auto& r = rep.results.back();
+    if (own) r.server_cpu_s = process_cpu_seconds(own->pid()) - c0 - idle_rate * r.seconds;
+  };
   rep.before = admin.call("system.info");
-  rep.results.push_back(run_clients("system.info", uri, token, o.clients, o.seconds, {{"system.info", json::object()}}));
-  if (rep.scan_id)
-    rep.results.push_back(run_clients("scan.points", uri, token, o.clients, o.seconds,
-                                      {{"scan.points", json{{"scan", rep.scan_id}, {"offset", 0}, {"limit", 10}}}}));
+  measure("system.info", {{"system.info", json::object()}});
+  if (rep.scan_id) measure("scan.points", {{"scan.points", json{{"scan", rep.scan_id}, {"offset", 0}, {"limit", 10}}}});
   if (o.throughput && rep.scan_id) rep.throughput = measure_throughput(admin, o, uri, token, rep.scan_id, rep.results);
   rep.after = admin.call("system.info");
   rep.scan = rep.scan_id ? admin.call("scan.get", json{{"scan", rep.scan_id}}) : json(nullptr);
@@ -676,6 +744,8 @@ int main(int argc, char** argv) {
                  "run the client threads this much nicer (0–19): clients on another machine take "
                  "no CPU from goniod")
       ->check(CLI::Range(0, 19));
+  app.add_flag("--parse-replies", g_parse_replies,
+               "parse every answer whole, as gonioctl does (default: check its id and error only)");
   app.add_flag("--throughput", o.throughput,
                "also measure the scan's points per second idle and under the clients (a long scan "
                "on the mock at time scale 0)");

@@ -12,6 +12,8 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <climits>
+#include <cstdint>
 #include <cstring>
 #include <iterator>
 
@@ -159,18 +161,94 @@ std::optional<std::string> Client::read_line(std::chrono::milliseconds timeout) 
   return std::string(*line);
 }
 
-json Client::call(const std::string& method, const json& params) {
+std::int64_t Client::send_request(const std::string& method, const json& params) {
   const auto id = next_id_++;
   out_.clear();
   fmt::format_to(std::back_inserter(out_), R"({{"jsonrpc":"2.0","id":{},"method":{},"params":{}}})"
                  "\n", id, json(method).dump(), params.dump());
   send_all(out_);
+  return id;
+}
+
+namespace {
+
+// The top-level members of an answer that matter to a caller that wants only to know it
+// arrived: its id and whether it is an error. Everything else is read and dropped.
+struct Envelope : nlohmann::json_sax<json> {
+  int depth = 0;
+  bool at_id = false, has_id = false, id_null = false, has_error = false;
+  std::optional<std::int64_t> id;
+
+  bool value() {
+    at_id = false;
+    return true;
+  }
+  bool null() override {
+    if (at_id) id_null = true;
+    return value();
+  }
+  bool boolean(bool) override { return value(); }
+  bool number_integer(number_integer_t v) override {
+    if (at_id) id = v;
+    return value();
+  }
+  bool number_unsigned(number_unsigned_t v) override {
+    if (at_id && v <= static_cast<number_unsigned_t>(INT64_MAX)) id = static_cast<std::int64_t>(v);
+    return value();
+  }
+  bool number_float(number_float_t, const string_t&) override { return value(); }
+  bool string(string_t&) override { return value(); }
+  bool binary(binary_t&) override { return value(); }
+  bool start_object(std::size_t) override {
+    at_id = false;
+    ++depth;
+    return true;
+  }
+  bool key(string_t& k) override {
+    if (depth == 1) {
+      at_id = k == "id";
+      has_id = has_id || at_id;
+      has_error = has_error || k == "error";
+    }
+    return true;
+  }
+  bool end_object() override {
+    --depth;
+    return true;
+  }
+  bool start_array(std::size_t) override {
+    at_id = false;
+    ++depth;
+    return true;
+  }
+  bool end_array() override {
+    --depth;
+    return true;
+  }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override { return false; }
+};
+
+[[noreturn]] void throw_error(const json& msg) {
+  const auto& e = msg["error"];
+  throw RpcError(e.value("code", 0), e.value("message", ""), e.value("data", json::object()));
+}
+
+}  // namespace
+
+void Client::await(std::int64_t id, const std::string& method, bool full, json& msg) {
   const auto deadline = Clock::now() + timeout_;
   for (;;) {
     const auto line = next_line(std::chrono::milliseconds(remaining_ms(deadline)));
     if (!line) throw ConnectionError(fmt::format("{}: no answer to {} within {} s", uri_, method,
                                                  timeout_.count() / 1000.0));
-    json msg = json::parse(line->begin(), line->end(), nullptr, false);
+    if (!full) {
+      Envelope env;
+      if (!json::sax_parse(line->begin(), line->end(), &env))
+        throw ConnectionError(fmt::format("{}: unreadable reply", uri_));
+      if (env.has_id && !env.has_error && env.id == id) return;
+      // An error, a notification or an answer to something else: read whole below.
+    }
+    msg = json::parse(line->begin(), line->end(), nullptr, false);
     if (msg.is_discarded()) throw ConnectionError(fmt::format("{}: unreadable reply", uri_));
     const auto it = msg.find("id");
     if (it == msg.end()) {
@@ -179,10 +257,20 @@ json Client::call(const std::string& method, const json& params) {
     }
     const bool ours = it->is_number_integer() && it->get<std::int64_t>() == id;
     if (!ours && !(it->is_null() && msg.contains("error"))) continue;  // an answer to something else
-    if (const auto e = msg.find("error"); e != msg.end())
-      throw RpcError(e->value("code", 0), e->value("message", ""), e->value("data", json::object()));
-    return std::move(msg["result"]);
+    if (msg.contains("error")) throw_error(msg);
+    return;
   }
+}
+
+json Client::call(const std::string& method, const json& params) {
+  json msg;
+  await(send_request(method, params), method, true, msg);
+  return std::move(msg["result"]);
+}
+
+void Client::call_checked(const std::string& method, const json& params) {
+  json msg;
+  await(send_request(method, params), method, false, msg);
 }
 
 json Client::login(const std::string& token) { return call("auth.login", json{{"token", token}}); }

@@ -299,20 +299,32 @@ class NdjsonSession final : public rpc::Session,
 
   // One timer: a started message must complete within read_timeout; an idle connection
   // lives idle_timeout (0: forever).
+  // The read deadline moves with every message, so the timer is not re-armed each time (a
+  // cancelled wait is a handler run through the scheduler, twice per request): the deadline
+  // is a field, and the one wait outstanding checks it when it fires and waits again if it
+  // has moved on. Only a deadline earlier than the wait's (a line started on an idle
+  // connection) re-arms it.
   void arm_timer() {
     if (closed_) return;
     std::optional<Clock::time_point> deadline;
     if (!buffer_.empty()) deadline = partial_since_ + limits_.read_timeout;
     else if (limits_.idle_timeout.count() > 0) deadline = last_activity_ + limits_.idle_timeout;
-    if (!deadline) {
-      timer_.cancel();
-      return;
-    }
-    deadline_ = *deadline;
-    timer_.expires_at(*deadline);
-    timer_.async_wait([self = this->shared_from_this()](const error_code& ec) {
-      if (ec || self->closed_) return;
-      if (Clock::now() < self->deadline_) return;  // re-armed meanwhile
+    deadline_ = deadline.value_or(Clock::time_point::max());
+    if (deadline && (!waiting_ || *deadline < wait_until_)) wait_for_deadline();
+  }
+
+  void wait_for_deadline() {
+    waiting_ = true;
+    wait_until_ = deadline_;
+    timer_.expires_at(deadline_);
+    timer_.async_wait([self = this->shared_from_this(), generation = ++wait_generation_](const error_code& ec) {
+      if (generation != self->wait_generation_) return;  // replaced by an earlier deadline
+      self->waiting_ = false;
+      if (ec || self->closed_ || self->deadline_ == Clock::time_point::max()) return;
+      if (Clock::now() < self->deadline_) {  // moved on meanwhile
+        self->wait_for_deadline();
+        return;
+      }
       // Complete lines waiting for replies to drain are not a stalled peer (the write
       // deadline covers one that does not read).
       if (!self->buffer_.empty() && self->buffer_.find('\n') != std::string::npos) return;
@@ -357,6 +369,9 @@ class NdjsonSession final : public rpc::Session,
   std::size_t in_flight_ = 0;
   std::size_t input_accounted_ = 0;  // bytes of buffer_ counted in stats_.buffered_bytes
   Clock::time_point partial_since_, last_activity_, deadline_;
+  Clock::time_point wait_until_;    // when the outstanding wait fires
+  bool waiting_ = false;            // a wait on timer_ is outstanding
+  std::uint64_t wait_generation_ = 0;
 };
 
 template <class Protocol>

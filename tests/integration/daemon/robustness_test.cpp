@@ -2,7 +2,9 @@
 // requests over a socket, subscriptions on NDJSON and WebSocket.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <set>
+#include <thread>
 
 #include "gonio/test/daemon_harness.hpp"
 
@@ -108,6 +110,28 @@ TEST(Robustness, StalledClientsAreDroppedWithoutHoldingOthers) {
   Conn h(connect_tcp("127.0.0.1", g.http_port()));
   h.send_raw("POST /rpc HTTP/1.1\r\nHost: x\r\nContent-Length: 100\r\n\r\n{");
   EXPECT_TRUE(h.closed_by_peer(10s));
+}
+
+// The read deadline is a field that moves with every message, checked by one outstanding
+// timer wait (net/ndjson.cpp): a busy connection outlives the idle timeout, and a line
+// started on a connection that idled is held to the (earlier) read timeout, not the idle one.
+TEST(Robustness, TheReadDeadlineFollowsEachConnection) {
+  TempDir dir;
+  auto cfg = small_limits();
+  cfg.insert(cfg.find("read_timeout_s = 1\n"), "idle_timeout_s = 6\n");
+  Goniod g(dir.path, cfg);
+  auto busy = g.unix_conn();
+  auto idler = g.unix_conn();
+  std::this_thread::sleep_for(500ms);
+  idler.send_raw("{\"jsonrpc\":\"2.0\",\"id\":1,");  // and nothing more
+  // 1 s to finish the line; the idle deadline it replaces was 5.5 s away.
+  EXPECT_TRUE(idler.closed_by_peer(4s));
+  // The busy one has sent something every 0.5 s for longer than the idle timeout.
+  for (int i = 0; i < 16; ++i) {
+    ASSERT_TRUE(busy.request("system.info").contains("result")) << "request " << i;
+    std::this_thread::sleep_for(500ms);
+  }
+  EXPECT_TRUE(busy.request("system.info").contains("result"));
 }
 
 TEST(Robustness, SubscriptionsOverNdjsonAndWebSocket) {

@@ -51,6 +51,12 @@ class Client {
 
   // Sends a request and returns its result; throws RpcError or ConnectionError.
   nlohmann::json call(const std::string& method, const nlohmann::json& params = nlohmann::json::object());
+  // The same, for load generators: the answer is checked (its id, and whether it is an
+  // error, which then throws as call() does) by one pass over its text that builds nothing,
+  // and its result is not returned. A load generator on the same cores as the server then
+  // measures the server rather than its own allocation of the answer's tree.
+  void call_checked(const std::string& method, const nlohmann::json& params = nlohmann::json::object());
+
   // auth.login with a token (needed on TCP).
   nlohmann::json login(const std::string& token);
 
@@ -63,6 +69,10 @@ class Client {
 
  private:
   void send_all(std::string_view data);
+  std::int64_t send_request(const std::string& method, const nlohmann::json& params);
+  // The answer to `id`: kept notifications and answers to something else are passed over;
+  // an error throws RpcError. `full` parses the answer into `msg` (else it is only checked).
+  void await(std::int64_t id, const std::string& method, bool full, nlohmann::json& msg);
   // The next line, valid until the next read; nullopt after `timeout` without one.
   std::optional<std::string_view> next_line(std::chrono::milliseconds timeout);
 
