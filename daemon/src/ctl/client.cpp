@@ -12,7 +12,6 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <climits>
 #include <cstdint>
 #include <cstring>
 #include <iterator>
@@ -176,17 +175,14 @@ namespace {
 // arrived: its id and whether it is an error. Everything else is read and dropped.
 struct Envelope : nlohmann::json_sax<json> {
   int depth = 0;
-  bool at_id = false, has_id = false, id_null = false, has_error = false;
+  bool at_id = false, has_id = false, has_error = false;
   std::optional<std::int64_t> id;
 
   bool value() {
     at_id = false;
     return true;
   }
-  bool null() override {
-    if (at_id) id_null = true;
-    return value();
-  }
+  bool null() override { return value(); }
   bool boolean(bool) override { return value(); }
   bool number_integer(number_integer_t v) override {
     if (at_id) id = v;

@@ -6,9 +6,6 @@
 #include <atomic>
 #include <charconv>
 #include <chrono>
-#include <iterator>
-
-#include <fmt/format.h>
 
 #include "gonio/proto/version.hpp"
 #include "methods/params.hpp"

@@ -298,12 +298,11 @@ class NdjsonSession final : public rpc::Session,
   }
 
   // One timer: a started message must complete within read_timeout; an idle connection
-  // lives idle_timeout (0: forever).
-  // The read deadline moves with every message, so the timer is not re-armed each time (a
-  // cancelled wait is a handler run through the scheduler, twice per request): the deadline
-  // is a field, and the one wait outstanding checks it when it fires and waits again if it
-  // has moved on. Only a deadline earlier than the wait's (a line started on an idle
-  // connection) re-arms it.
+  // lives idle_timeout (0: forever). The deadline moves with every message, so the timer is
+  // not re-armed each time (a cancelled wait is a handler run through the scheduler, twice
+  // per request): the deadline is a field, and the one wait outstanding checks it when it
+  // fires and waits again if it has moved on. Only a deadline earlier than the wait's (a
+  // line started on an idle connection) re-arms it.
   void arm_timer() {
     if (closed_) return;
     std::optional<Clock::time_point> deadline;
