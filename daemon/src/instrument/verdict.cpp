@@ -153,9 +153,9 @@ void ScanEvidence::add(const PointRecord& rec) {
   const auto& q = *rec.predicted;
   if (m.size() != channels_ || q.size() != channels_) return;
   Point pt;
+  pt.p.reserve(channels_);
   pt.columns.resize(names_.size());
-  pt.curvature.resize(names_.size());
-  pt.cross.resize(names_.size());
+  std::vector<std::vector<double>> curvature(names_.size()), cross(names_.size());
   for (std::size_t j = 0; j < names_.size(); ++j) {
     const auto& col = names_[j];
     std::vector<double> v(channels_, 0.0);
@@ -168,11 +168,11 @@ void ScanEvidence::add(const PointRecord& rec) {
         if (e.component == component && e.sensitivity.size() == channels_) {
           v = e.sensitivity;
           if (cross_of_[j] != std::string::npos)
-            pt.cross[j] = e.cross.size() == channels_ ? e.cross : std::vector<double>(channels_, 0.0);
-          if (col.curved) pt.curvature[j] = e.curvature.size() == channels_ ? e.curvature : std::vector<double>(channels_, 0.0);
+            cross[j] = e.cross.size() == channels_ ? e.cross : std::vector<double>(channels_, 0.0);
+          if (col.curved) curvature[j] = e.curvature.size() == channels_ ? e.curvature : std::vector<double>(channels_, 0.0);
         }
-      if (col.curved && pt.curvature[j].empty()) pt.curvature[j].assign(channels_, 0.0);
-      if (cross_of_[j] != std::string::npos && pt.cross[j].empty()) pt.cross[j].assign(channels_, 0.0);
+      if (col.curved && curvature[j].empty()) curvature[j].assign(channels_, 0.0);
+      if (cross_of_[j] != std::string::npos && cross[j].empty()) cross[j].assign(channels_, 0.0);
     }
     pt.columns[j] = std::move(v);
   }
@@ -187,8 +187,8 @@ void ScanEvidence::add(const PointRecord& rec) {
     const double w = 1.0 / var;
     for (std::size_t j = 0; j < names_.size(); ++j) {
       ext[j] = pt.columns[j][c];
-      if (curvature_of_[j] != std::string::npos) ext[curvature_of_[j]] = pt.curvature[j][c];
-      if (cross_of_[j] != std::string::npos) ext[cross_of_[j]] = pt.cross[j][c];
+      if (curvature_of_[j] != std::string::npos) ext[curvature_of_[j]] = curvature[j][c];
+      if (cross_of_[j] != std::string::npos) ext[cross_of_[j]] = cross[j][c];
     }
     ext[residual_] = r;
     for (std::size_t i = 0; i < ext.size(); ++i)
@@ -204,10 +204,12 @@ void ScanEvidence::add(const PointRecord& rec) {
     band.pr += pv * r;
     for (std::size_t j = 0; j < names_.size(); ++j) {
       band.ps[j] += pv * pt.columns[j][c];
-      if (!pt.curvature[j].empty()) band.pc2[j] += pv * pt.curvature[j][c];
-      if (!pt.cross[j].empty()) band.px[j] += pv * pt.cross[j][c];
+      if (!curvature[j].empty()) band.pc2[j] += pv * curvature[j][c];
+      if (!cross[j].empty()) band.px[j] += pv * cross[j][c];
     }
   }
+  for (std::size_t j = 0; j < names_.size(); ++j)
+    if (names_[j].kind != "sample") std::vector<double>().swap(pt.columns[j]);
   points_.push_back(std::move(pt));
 }
 

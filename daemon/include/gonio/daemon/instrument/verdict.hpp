@@ -96,11 +96,13 @@ class ScanEvidence {
     bool curved = false;  // the budget states ∂²β/∂x² (arm offsets): β = c1·θ + ½·c2·θ²
     bool bounded = false; // rectangular or triangular: held within ±limit when not free
   };
+  // What a point keeps once added: what the judgement of a sample parameter's effect point
+  // by point needs (effect_decision). The instrument columns, curvatures and cross terms live
+  // on only in the Gram matrix and the bands: kept per point, they grew a long scan by ~4 kB
+  // a point.
   struct Point {
-    std::vector<double> p;                       // the prediction, per channel
-    std::vector<std::vector<double>> columns;   // per column, per channel
-    std::vector<std::vector<double>> curvature; // per column (empty: linear), per channel
-    std::vector<std::vector<double>> cross;     // per column with a partner, per channel
+    std::vector<double> p;                      // the prediction, per channel
+    std::vector<std::vector<double>> columns;  // per column, per channel; empty unless a sample column
   };
   struct Fit {
     std::vector<std::size_t> free;  // columns without prior
