@@ -117,6 +117,8 @@ void ScanEvidence::setup(const PointRecord& p) {
     names_.push_back(Column{s.parameter, "sample", "", 0, 0, s.value,
                             s.value != 0 ? std::abs(s.value) : std::numeric_limits<double>::infinity(), false, false});
   const auto n = names_.size();
+  for (std::size_t j = 0; j < n; ++j)
+    if (names_[j].kind == "sample") sample_columns_.push_back(j);
   curvature_of_.assign(n, std::string::npos);
   cross_of_.assign(n, std::string::npos);
   partner_.assign(n, std::string::npos);
@@ -152,10 +154,7 @@ void ScanEvidence::add(const PointRecord& rec) {
   const auto& m = rec.measured;
   const auto& q = *rec.predicted;
   if (m.size() != channels_ || q.size() != channels_) return;
-  Point pt;
-  pt.p.reserve(channels_);
-  pt.columns.resize(names_.size());
-  std::vector<std::vector<double>> curvature(names_.size()), cross(names_.size());
+  std::vector<std::vector<double>> columns(names_.size()), curvature(names_.size()), cross(names_.size());
   for (std::size_t j = 0; j < names_.size(); ++j) {
     const auto& col = names_[j];
     std::vector<double> v(channels_, 0.0);
@@ -174,7 +173,7 @@ void ScanEvidence::add(const PointRecord& rec) {
       if (col.curved && curvature[j].empty()) curvature[j].assign(channels_, 0.0);
       if (cross_of_[j] != std::string::npos && cross[j].empty()) cross[j].assign(channels_, 0.0);
     }
-    pt.columns[j] = std::move(v);
+    columns[j] = std::move(v);
   }
   std::vector<double> ext(G_.size(), 0.0);
   for (std::size_t c = 0; c < channels_; ++c) {
@@ -182,11 +181,10 @@ void ScanEvidence::add(const PointRecord& rec) {
     for (const auto& e : rec.budget)
       if (e.random && c < e.contribution.size()) var += e.contribution[c] * e.contribution[c];
     const double r = m.values[c] - q.values[c];
-    pt.p.push_back(q.values[c]);
     if (!(var > 0)) continue;
     const double w = 1.0 / var;
     for (std::size_t j = 0; j < names_.size(); ++j) {
-      ext[j] = pt.columns[j][c];
+      ext[j] = columns[j][c];
       if (curvature_of_[j] != std::string::npos) ext[curvature_of_[j]] = curvature[j][c];
       if (cross_of_[j] != std::string::npos) ext[cross_of_[j]] = cross[j][c];
     }
@@ -203,14 +201,19 @@ void ScanEvidence::add(const PointRecord& rec) {
     band.pp += pv * q.values[c];
     band.pr += pv * r;
     for (std::size_t j = 0; j < names_.size(); ++j) {
-      band.ps[j] += pv * pt.columns[j][c];
+      band.ps[j] += pv * columns[j][c];
       if (!curvature[j].empty()) band.pc2[j] += pv * curvature[j][c];
       if (!cross[j].empty()) band.px[j] += pv * cross[j][c];
     }
   }
-  for (std::size_t j = 0; j < names_.size(); ++j)
-    if (names_[j].kind != "sample") std::vector<double>().swap(pt.columns[j]);
-  points_.push_back(std::move(pt));
+  for (const auto j : sample_columns_) {
+    double margin = std::numeric_limits<double>::infinity();
+    for (std::size_t c = 0; c < channels_; ++c)
+      if (const double sens = std::abs(columns[j][c]); sens > 0)
+        margin = std::min(margin, tolerance_ * std::abs(q.values[c]) / sens);
+    margins_.push_back(margin);
+  }
+  ++points_;
 }
 
 ScanEvidence::Fit ScanEvidence::solve(const std::vector<std::size_t>& columns,
@@ -439,18 +442,23 @@ ScanEvidence::BandResult ScanEvidence::band_decision(const Fit& fit) const {
   return out;
 }
 
-// The effect of a sample parameter's fitted change on β, judged point by point.
+// The effect of a sample parameter's fitted change on β, judged point by point. At a channel
+// with sensitivity s the rule (decide) compares |s·δ| ± k·|s|·u with tolerance·|β|, that is
+// |δ| ± k·u with tolerance·|β|/|s|: the point is out of tolerance where some channel is,
+// that is where |δ| − k·u exceeds the smallest of those margins, and agrees where every
+// channel does, where |δ| + k·u is within it.
 Decision ScanEvidence::effect_decision(const Fitted& c, std::size_t& out_points) const {
   const auto cause = cause_of(c);
-  const double delta = cause.value - cause.nominal;
+  const double delta = std::abs(cause.value - cause.nominal), ku = k_ * cause.u;
+  const auto slot = static_cast<std::size_t>(
+      std::find(sample_columns_.begin(), sample_columns_.end(), c.column) - sample_columns_.begin());
   Decision d = Decision::agrees;
   out_points = 0;
-  for (const auto& pt : points_) {
-    Decision pd = Decision::agrees;
-    for (std::size_t ch = 0; ch < channels_; ++ch) {
-      const double s = pt.columns[c.column][ch];
-      pd = worse(pd, decide(s * delta, std::abs(s) * cause.u, tolerance_ * std::abs(pt.p[ch]), k_));
-    }
+  for (std::size_t i = 0; i < points_; ++i) {
+    const double margin = margins_[i * sample_columns_.size() + slot];
+    const Decision pd = delta - ku > margin    ? Decision::out_of_tolerance
+                        : delta + ku <= margin ? Decision::agrees
+                                               : Decision::undecided;
     if (pd == Decision::out_of_tolerance) ++out_points;
     d = worse(d, pd);
   }
@@ -489,7 +497,7 @@ std::string ScanEvidence::decide_for(const Fitted& c, std::string& text) const {
   text = fmt::format("the sample differs from its catalogue: {}; {}", describe(cause),
                      d == Decision::out_of_tolerance
                          ? fmt::format("beyond the tolerance {} at {} of {} points", tolerance_text(), out_points,
-                                       points_.size())
+                                       points_)
                      : d == Decision::agrees ? fmt::format("within the tolerance {} at every point", tolerance_text())
                                              : fmt::format("not decidable against the tolerance {}", tolerance_text()));
   return decision_text(d);
@@ -500,10 +508,10 @@ std::string ScanEvidence::decide_for(const Fitted& c, std::string& text) const {
 // named, and its decision is the scan's. Otherwise the scan is judged per band under H0.
 ScanVerdict ScanEvidence::verdict() const {
   ScanVerdict v;
-  v.points_used = points_.size();
+  v.points_used = points_;
   const auto needed = std::max<std::size_t>(5, 2 * candidates());
-  if (points_.size() < 3 || n_ == 0) {
-    v.summary = fmt::format("{} points with predictions: a verdict needs 3, a named cause {}", points_.size(),
+  if (points_ < 3 || n_ == 0) {
+    v.summary = fmt::format("{} points with predictions: a verdict needs 3, a named cause {}", points_,
                             needed);
     return v;
   }
@@ -511,7 +519,7 @@ ScanVerdict ScanEvidence::verdict() const {
   for (std::size_t j = 0; j < names_.size(); ++j) (names_[j].kind == "sample" ? sample : instrument).push_back(j);
   const auto h0 = solve(instrument, {});
   // Too few points for a cause: only the per-band test.
-  const auto cands = points_.size() < needed ? std::vector<Fitted>{} : fit_candidates(instrument, sample);
+  const auto cands = points_ < needed ? std::vector<Fitted>{} : fit_candidates(instrument, sample);
   for (const auto& c : cands) v.candidates.push_back({cause_of(c), h0.chi2 - c.fit.chi2});
   // Evidence: a candidate that lowers χ² by kSignificant. (H0 holds each rectangular input
   // within its stated limit, so an arm truly beyond it cannot hide in H0's prior.)
@@ -523,8 +531,8 @@ ScanVerdict ScanEvidence::verdict() const {
     v.chi2_per_dof = h0.chi2 / dof(0);
     v.summary = fmt::format("{} over {} points: the worst band differs by {:+.2f} ± {:.2f} % (tolerance {}); {} (χ²/dof {:.3g})",
                             b.decision == Decision::agrees ? "agrees" : b.decision == Decision::out_of_tolerance ? "out of tolerance" : "undecided",
-                            points_.size(), 100 * b.worst_rel, 100 * b.worst_u, tolerance_text(),
-                            points_.size() < needed
+                            points_, 100 * b.worst_rel, 100 * b.worst_u, tolerance_text(),
+                            points_ < needed
                                 ? fmt::format("the cause is undetermined until {} points are in", needed)
                                 : std::string("no candidate cause stands out"),
                             v.chi2_per_dof);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <random>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -94,6 +95,30 @@ TEST(Verdict, AnAlbedoBandTwiceItsToleranceIsOutOfToleranceAndNamed) {
     EXPECT_EQ(v.cause->parameter, "lambert.albedo@600");
     EXPECT_NEAR(v.cause->value, 0.45 * 1.04, 3 * v.cause->u + 1e-9);
     EXPECT_NEAR(v.cause->nominal, 0.45, 1e-12);
+  }
+}
+
+// The sample's effect is judged point by point from one margin per point (verdict.cpp): the
+// count of points out of tolerance is the rule (decide) applied to every channel of every
+// point, counted here from the points themselves.
+TEST(Verdict, ASampleCauseIsJudgedAtEveryPointAsTheRuleWould) {
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    const auto points = scan({.albedo_600 = 0.45 * 0.04}, 61, seed);
+    const double tol = 0.02, k = 2.0;
+    const auto v = judge(points, tol);
+    ASSERT_TRUE(v.cause.has_value()) << v.summary;
+    const double delta = v.cause->value - v.cause->nominal;
+    std::size_t out = 0;
+    for (const auto& p : points) {
+      const auto& s = p.sample_sensitivity[0].sensitivity;  // lambert.albedo@600
+      Decision d = Decision::agrees;
+      for (std::size_t c = 0; c < s.size(); ++c)
+        d = worse(d, decide(s[c] * delta, std::abs(s[c]) * v.cause->u, tol * std::abs(p.predicted->values[c]), k));
+      out += d == Decision::out_of_tolerance ? 1 : 0;
+    }
+    ASSERT_GT(out, 0u);
+    EXPECT_NE(v.summary.find(fmt::format("at {} of 61 points", out)), std::string::npos)
+        << v.summary << " (the rule counts " << out << ")";
   }
 }
 

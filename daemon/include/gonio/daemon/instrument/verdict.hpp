@@ -79,7 +79,7 @@ class ScanEvidence {
 
   // Adds a point with its prediction, budget and sample sensitivities (others are skipped).
   void add(const PointRecord& p);
-  std::size_t points() const noexcept { return points_.size(); }
+  std::size_t points() const noexcept { return points_; }
   std::size_t candidates() const noexcept;  // candidate causes (arms, white, sample parameters)
 
   ScanVerdict verdict() const;
@@ -95,14 +95,6 @@ class ScanEvidence {
     double max_change = 0;
     bool curved = false;  // the budget states ∂²β/∂x² (arm offsets): β = c1·θ + ½·c2·θ²
     bool bounded = false; // rectangular or triangular: held within ±limit when not free
-  };
-  // What a point keeps once added: what the judgement of a sample parameter's effect point
-  // by point needs (effect_decision). The instrument columns, curvatures and cross terms live
-  // on only in the Gram matrix and the bands: kept per point, they grew a long scan by ~4 kB
-  // a point.
-  struct Point {
-    std::vector<double> p;                      // the prediction, per channel
-    std::vector<std::vector<double>> columns;  // per column, per channel; empty unless a sample column
   };
   struct Fit {
     std::vector<std::size_t> free;  // columns without prior
@@ -136,7 +128,12 @@ class ScanEvidence {
 
   double tolerance_, k_;
   std::vector<Column> names_;
-  std::vector<Point> points_;
+  std::size_t points_ = 0;
+  // Per point, per sample column: the smallest tolerance·|β| / |∂β/∂x| over the channels
+  // (+∞ where no channel is sensitive), all that the rule needs to judge a fitted change of
+  // x at that point (effect_decision). Point after point, sample column after column.
+  std::vector<double> margins_;
+  std::vector<std::size_t> sample_columns_;
   std::size_t channels_ = 0;
   // The weighted Gram matrix G = Σ w e eᵀ of the extended columns e = (each column's
   // sensitivity, the curvature of each curved one, the residual r), n residuals. Every fit's
