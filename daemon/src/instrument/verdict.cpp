@@ -445,20 +445,17 @@ ScanEvidence::BandResult ScanEvidence::band_decision(const Fit& fit) const {
 // The effect of a sample parameter's fitted change on β, judged point by point. At a channel
 // with sensitivity s the rule (decide) compares |s·δ| ± k·|s|·u with tolerance·|β|, that is
 // |δ| ± k·u with tolerance·|β|/|s|: the point is out of tolerance where some channel is,
-// that is where |δ| − k·u exceeds the smallest of those margins, and agrees where every
-// channel does, where |δ| + k·u is within it.
+// and agrees where every channel does, exactly as the rule judges δ against the smallest of
+// those margins.
 Decision ScanEvidence::effect_decision(const Fitted& c, std::size_t& out_points) const {
   const auto cause = cause_of(c);
-  const double delta = std::abs(cause.value - cause.nominal), ku = k_ * cause.u;
+  const double delta = cause.value - cause.nominal;
   const auto slot = static_cast<std::size_t>(
       std::find(sample_columns_.begin(), sample_columns_.end(), c.column) - sample_columns_.begin());
   Decision d = Decision::agrees;
   out_points = 0;
   for (std::size_t i = 0; i < points_; ++i) {
-    const double margin = margins_[i * sample_columns_.size() + slot];
-    const Decision pd = delta - ku > margin    ? Decision::out_of_tolerance
-                        : delta + ku <= margin ? Decision::agrees
-                                               : Decision::undecided;
+    const Decision pd = decide(delta, cause.u, margins_[i * sample_columns_.size() + slot], k_);
     if (pd == Decision::out_of_tolerance) ++out_points;
     d = worse(d, pd);
   }
