@@ -394,18 +394,33 @@ Result run_clients(const std::string& target, const std::string& uri, const std:
   return res;
 }
 
+// Adds a round's figures to those of the earlier rounds of the same target.
+void pool(Result& into, Result r) {
+  if (into.target.empty()) {
+    into = std::move(r);
+    return;
+  }
+  into.requests += r.requests;
+  into.errors += r.errors;
+  into.seconds += r.seconds;
+  into.server_cpu_s += r.server_cpu_s;
+  into.latency_ms.insert(into.latency_ms.end(), r.latency_ms.begin(), r.latency_ms.end());
+}
+
 struct Options {
   std::string goniod, connect, token, token_file;
   std::size_t clients = 64;
   double seconds = 5, time_scale = 1;
+  int rounds = 3;  // the baselines and system.info alternate this many times
   bool as_json = false, hostile = false, throughput = false;
   std::optional<double> client_share;  // server.client_share_busy of the goniod it starts
+  std::optional<int> io_threads;       // server.io_threads of the goniod it starts
 };
 
 // goniod --mock in a fresh state directory with a TCP listener, stopped and removed at the end.
 class Goniod {
  public:
-  Goniod(std::string exe, double time_scale, std::optional<double> client_share) {
+  Goniod(std::string exe, double time_scale, std::optional<double> client_share, std::optional<int> io_threads) {
     std::string tmpl = (fs::temp_directory_path() / "gonio-load-XXXXXX").string();
     if (!::mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed");
     dir_ = tmpl;
@@ -414,6 +429,7 @@ class Goniod {
       std::ofstream cfg(dir_ / "load.toml");
       cfg << "[server]\nlog_level = \"warn\"\nlisten = [\"tcp://127.0.0.1:0\"]\n"
           << (client_share ? fmt::format("client_share_busy = {}\n", *client_share) : std::string())
+          << (io_threads ? fmt::format("io_threads = {}\n", *io_threads) : std::string())
           << "max_connections = 4096\n\n[instrument.motion]\ndriver = \"mock\"\n"
           << fmt::format("sample = \"{}\"\ntime_scale = {}\n\n", gonio::daemon::kDemoSampleBsdf, time_scale)
           << "[instrument.photometer]\ndriver = \"mock\"\n";
@@ -631,12 +647,28 @@ void print(const Report& rep, const Options& o) {
                        {"throughput_rps", rps}, {"p50_ms", p50}, {"p99_ms", p99}, {"max_ms", mx},
                        {"errors", r.errors}, {"server_cpu_us_per_request", server_us}});
   }
+  // Each target against echo, as the speed targets are set: req/s ≥ 50 %, p50 ≤ 2×, p99 ≤ 1.3×.
+  json vs_echo = json::object();
+  std::string ratios;
+  if (!out.empty() && out[0]["target"] == "echo (baseline)") {
+    const auto& e = out[0];
+    for (std::size_t i = 1; i < out.size(); ++i) {
+      const auto& r = out[i];
+      if (r["target"] == "scan.points") continue;  // not a baseline's kind of call
+      const double tp = r["throughput_rps"].get<double>() / e["throughput_rps"].get<double>();
+      const double p50 = r["p50_ms"].get<double>() / e["p50_ms"].get<double>();
+      const double p99 = r["p99_ms"].get<double>() / e["p99_ms"].get<double>();
+      vs_echo[r["target"].get<std::string>()] = json{{"throughput", tp}, {"p50", p50}, {"p99", p99}};
+      ratios += fmt::format("{} ÷ echo: req/s {:.0f} %, p50 {:.2f}×, p99 {:.2f}×\n", r["target"].get<std::string>(),
+                            100 * tp, p50, p99);
+    }
+  }
   const auto& runner = rep.after["runner"];
   const double rss_mib = rep.after["rss_bytes"].get<double>() / (1024.0 * 1024.0);
   const auto points_during = runner["points_measured"].get<std::int64_t>() -
                              rep.before["runner"]["points_measured"].get<std::int64_t>();
   if (o.as_json) {
-    std::cout << json{{"results", out},           {"goniod_rss_mib", rss_mib},
+    std::cout << json{{"results", out},           {"vs_echo", vs_echo}, {"goniod_rss_mib", rss_mib},
                       {"runner", runner},         {"scan", rep.scan},
                       {"points_during_run", points_during}, {"hostile", rep.hostile},
                       {"throughput", rep.throughput}}
@@ -644,7 +676,7 @@ void print(const Report& rep, const Options& o) {
               << "\n";
     return;
   }
-  std::cout << t.render();
+  std::cout << t.render() << ratios;
   std::cout << fmt::format(
       "goniod: rss {:.1f} MiB; scan {} {} with {} points measured during the run; runner's own time "
       "per point p50 {} ms, p99 {} ms, max {} ms (last {} points)\n",
@@ -676,7 +708,7 @@ void run(Options o) {
   std::optional<Goniod> own;
   std::string uri = o.connect, token = o.token;
   if (uri.empty()) {
-    own.emplace(o.goniod, o.time_scale, o.client_share);
+    own.emplace(o.goniod, o.time_scale, o.client_share, o.io_threads);
     uri = own->uri();
     token = own->token();
   } else if (token.empty() && !o.token_file.empty()) {
@@ -692,14 +724,9 @@ void run(Options o) {
     const auto list = admin.call("scan.list", json{{"limit", 1}});
     if (!list.empty()) rep.scan_id = list[0]["id"].get<std::int64_t>();
   }
-  const auto baseline = [&](const std::string& target, std::string result) {
-    EchoServer echo(std::move(result));
-    const double cpu0 = echo.cpu_seconds();
-    rep.results.push_back(run_clients(target, echo.uri(), "", o.clients, o.seconds, {{"system.info", json::object()}}));
-    rep.results.back().server_cpu_s = echo.cpu_seconds() - cpu0;
-  };
-  baseline("echo (baseline)", {});
-  baseline("replay (system.info's bytes)", admin.call("system.info").dump());
+  // The baselines and system.info are measured in --rounds alternating rounds and pooled,
+  // so that the machine's drift over a run (other tenants of a VM) falls on all three alike.
+  EchoServer echo, replay(admin.call("system.info").dump());
   // goniod's CPU with no client (the running scan's), taken off its CPU under the clients.
   double idle_rate = NAN;
   if (own) {
@@ -708,15 +735,30 @@ void run(Options o) {
     std::this_thread::sleep_for(std::chrono::seconds(1));
     idle_rate = (process_cpu_seconds(own->pid()) - c0) / std::chrono::duration<double>(Clock::now() - t0).count();
   }
-  const auto measure = [&](const std::string& target, const Calls& calls) {
-    const double c0 = own ? process_cpu_seconds(own->pid()) : NAN;
-    rep.results.push_back(run_clients(target, uri, token, o.clients, o.seconds, calls));
-    auto& r = rep.results.back();
-    if (own) r.server_cpu_s = process_cpu_seconds(own->pid()) - c0 - idle_rate * r.seconds;
+  const auto measure = [&](const std::string& target, const std::string& at, const std::string& tok,
+                           const Calls& calls, double seconds, const std::function<double()>& cpu,
+                           double cpu_idle_rate) {
+    const double c0 = cpu();
+    auto r = run_clients(target, at, tok, o.clients, seconds, calls);
+    r.server_cpu_s = cpu() - c0 - cpu_idle_rate * r.seconds;
+    return r;
   };
+  const auto goniod_cpu = [&] { return own ? process_cpu_seconds(own->pid()) : NAN; };
+  const Calls info{{"system.info", json::object()}};
   rep.before = admin.call("system.info");
-  measure("system.info", {{"system.info", json::object()}});
-  if (rep.scan_id) measure("scan.points", {{"scan.points", json{{"scan", rep.scan_id}, {"offset", 0}, {"limit", 10}}}});
+  std::vector<Result> pooled(3);
+  for (int round = 0; round < o.rounds; ++round) {
+    const double s = o.seconds / o.rounds;
+    pool(pooled[0], measure("echo (baseline)", echo.uri(), "", info, s, [&] { return echo.cpu_seconds(); }, 0));
+    pool(pooled[1], measure("replay (system.info's bytes)", replay.uri(), "", info, s,
+                            [&] { return replay.cpu_seconds(); }, 0));
+    pool(pooled[2], measure("system.info", uri, token, info, s, goniod_cpu, idle_rate));
+  }
+  rep.results = pooled;
+  if (rep.scan_id)
+    rep.results.push_back(measure("scan.points", uri, token,
+                                  {{"scan.points", json{{"scan", rep.scan_id}, {"offset", 0}, {"limit", 10}}}},
+                                  o.seconds, goniod_cpu, idle_rate));
   if (o.throughput && rep.scan_id) rep.throughput = measure_throughput(admin, o, uri, token, rep.scan_id, rep.results);
   rep.after = admin.call("system.info");
   rep.scan = rep.scan_id ? admin.call("scan.get", json{{"scan", rep.scan_id}}) : json(nullptr);
@@ -735,11 +777,17 @@ int main(int argc, char** argv) {
   app.add_option("--token-file", o.token_file, "file with the token for --connect");
   app.add_option("--clients", o.clients, "concurrent clients")->check(CLI::Range(1, 1024));
   app.add_option("--seconds", o.seconds, "duration of each target")->check(CLI::Range(0.2, 3600.0));
+  app.add_option("--rounds", o.rounds,
+                 "measure the baselines and system.info in this many alternating rounds of "
+                 "seconds/rounds each, pooled")
+      ->check(CLI::Range(1, 100));
   app.add_option("--time-scale", o.time_scale, "the mock's real-time factor (keeps the scan running)");
   app.add_flag("--json", o.as_json, "print the figures as JSON");
   app.add_option("--client-share", o.client_share,
                  "server.client_share_busy of the goniod it starts (0: no client governor)")
       ->check(CLI::Range(0.0, 64.0));
+  app.add_option("--io-threads", o.io_threads, "server.io_threads of the goniod it starts")
+      ->check(CLI::Range(1, 64));
   app.add_option("--client-nice", g_client_nice,
                  "run the client threads this much nicer (0–19): clients on another machine take "
                  "no CPU from goniod")
