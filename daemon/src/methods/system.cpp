@@ -96,7 +96,7 @@ void register_system(MethodRegistrar& reg, Services& s) {
     ObjectReader(c.params, "").finish();
     const auto uptime = std::chrono::duration<double>(std::chrono::steady_clock::now() - s.started).count();
     std::string out;
-    out.reserve(fixed.size() + 1024);
+    out.reserve(fixed.size() + 2048);  // the live members, and the envelope around them
     out += fixed;
     JsonWriter w(out);
     w.member("uptime_s", uptime)

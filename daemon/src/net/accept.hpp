@@ -11,11 +11,23 @@
 #include <string_view>
 #include <utility>
 
+#include <boost/asio/any_io_executor.hpp>
 #include <boost/asio/error.hpp>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/strand.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <spdlog/spdlog.h>
 
+#include "gonio/daemon/net/net.hpp"
+
 namespace gonio::daemon::net {
+
+// The executor a new connection's socket, timers and handlers run on: the one the context
+// names, else a strand of its own on `io` (which several threads may run).
+inline boost::asio::any_io_executor connection_executor(boost::asio::io_context& io, const Context& ctx) {
+  if (ctx.connection_executor) return ctx.connection_executor();
+  return boost::asio::make_strand(io);
+}
 
 class AcceptBackoff {
  public:

@@ -530,7 +530,7 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
         endpoint_(std::move(endpoint)), st_(std::move(st)) {}
 
   void accept() {
-    acceptor_.async_accept(asio::make_strand(io_), [self = shared_from_this()](const error_code& ec, tcp::socket s) {
+    acceptor_.async_accept(connection_executor(io_, st_->ctx), [self = shared_from_this()](const error_code& ec, tcp::socket s) {
       if (ec) {
         if (ec == asio::error::operation_aborted || !self->acceptor_.is_open()) return;
         self->backoff_.failed(ec, self->endpoint_, self->st_->ctx.stats.accept_backoffs,

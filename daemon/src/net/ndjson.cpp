@@ -385,7 +385,7 @@ class NdjsonListener final : public Listener,
         endpoint_(std::move(endpoint)), ls_(std::move(ls)) {}
 
   void accept() {
-    acceptor_.async_accept(asio::make_strand(io_), [self = this->shared_from_this()](
+    acceptor_.async_accept(connection_executor(io_, ls_->ctx), [self = this->shared_from_this()](
                                                        const error_code& ec,
                                                        typename Protocol::socket socket) {
       if (ec) {

@@ -108,19 +108,32 @@ json response(const json& id, json result) {
 }
 
 std::string response_text(const json& id, Result result) {
-  // Spliced rather than built as one more JSON object around the result.
+  static constexpr std::string_view kHead = R"({"jsonrpc":"2.0","result":)", kIdKey = R"(,"id":)";
+  const auto id_text = id.dump(-1, ' ', false, kInvalidUtf8);
+  // A result the method wrote as text with room to spare is wrapped where it lies (saves an
+  // allocation and a copy of the answer per call; growing a full string instead would double
+  // a large answer's memory); the others are spliced rather than built as one more JSON
+  // object around the result.
+  const auto envelope = kHead.size() + kIdKey.size() + id_text.size() + 1;
+  if (auto* raw = std::get_if<RawJson>(&result); raw && !raw->shared && raw->text.capacity() >= raw->text.size() + envelope) {
+    auto out = std::move(raw->text);
+    out.insert(0, kHead);
+    out += kIdKey;
+    out += id_text;
+    out += '}';
+    return out;
+  }
   std::string body;
   const std::string* text = &body;
   if (std::holds_alternative<json>(result)) body = std::get<json>(result).dump(-1, ' ', false, kInvalidUtf8);
-  else if (auto& raw = std::get<RawJson>(result); raw.shared) text = raw.shared.get();
-  else body = std::move(raw.text);
+  else text = std::get<RawJson>(result).shared.get();
   std::string out;
-  out.reserve(text->size() + 48);
-  out += R"({"jsonrpc":"2.0","result":)";
+  out.reserve(text->size() + envelope);
+  out += kHead;
   out += *text;
   body = std::string();
-  out += R"(,"id":)";
-  out += id.dump(-1, ' ', false, kInvalidUtf8);
+  out += kIdKey;
+  out += id_text;
   out += '}';
   return out;
 }
@@ -244,16 +257,7 @@ std::size_t Dispatcher::handle(std::string_view text, const std::shared_ptr<Sess
     pump(pending, session);
     return n;
   }
-  const auto limit = limits_.max_response_bytes;
-  handle_one(message, session, [this, reply = std::move(reply), limit,
-                                id = message.is_object() && message.contains("id") ? message["id"] : json(nullptr)](
-                                   std::optional<std::string> r) {
-    if (r && r->size() > limit) {
-      ++errors_;
-      r = too_large_text(id.is_string() || id.is_number() ? id : json(nullptr), r->size(), limit);
-    }
-    reply(r ? std::move(*r) : std::string());
-  });
+  handle_one(message, session, std::move(reply), true);
   return 1;
 }
 
@@ -269,21 +273,21 @@ void Dispatcher::pump(const std::shared_ptr<Pending>& p, const std::shared_ptr<S
     const std::size_t i = p->next++;
     ++p->running;
     lock.unlock();
-    handle_one(p->message[i], session, [this, p, i, session](std::optional<std::string> r) {
+    handle_one(p->message[i], session, [this, p, i, session](std::string r) {
       std::function<void(std::string)> finish;
       {
         std::lock_guard l(p->mu);
         --p->running;
-        if (r) {
+        if (!r.empty()) {
           // The whole answer stays within the limit: an element that would push it over
           // answers with an error in its place (the call gets an error, not a partial reply).
-          if (p->bytes + r->size() + 1 > limits_.max_response_bytes) {
+          if (p->bytes + r.size() + 1 > limits_.max_response_bytes) {
             ++errors_;
-            r = too_large_text(p->ids[i], p->bytes + r->size() + 1, limits_.max_response_bytes);
+            r = too_large_text(p->ids[i], p->bytes + r.size() + 1, limits_.max_response_bytes);
           }
-          p->bytes += r->size() + 1;
+          p->bytes += r.size() + 1;
+          p->slots[i] = std::move(r);
         }
-        p->slots[i] = std::move(r);
         p->done[i] = 1;
         for (; p->flushed < p->slots.size() && p->done[p->flushed]; ++p->flushed) {
           auto& slot = p->slots[p->flushed];
@@ -302,7 +306,7 @@ void Dispatcher::pump(const std::shared_ptr<Pending>& p, const std::shared_ptr<S
         return;
       }
       pump(p, session);
-    });
+    }, false);
     lock.lock();
   }
   p->pumping = false;
@@ -394,24 +398,30 @@ void invoke(const Method& method, Call call, Finish& finish) {
 }  // namespace
 
 void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
-                            std::function<void(std::optional<std::string>)> done) const {
+                            std::function<void(std::string)> done, bool whole) const {
   ++requests_;
   Envelope env = read_envelope(req);
   if (env.error) {
     ++errors_;
-    if (env.answer_error) done(error_response(env.id, std::move(*env.error)).dump(-1, ' ', false, kInvalidUtf8));
-    else done(std::nullopt);
+    done(env.answer_error ? error_response(env.id, std::move(*env.error)).dump(-1, ' ', false, kInvalidUtf8)
+                          : std::string());
     return;
   }
   // From here on, notifications get no answer whatever happens.
-  auto finish = [this, notification = env.notification, id = env.id, done = std::move(done)](
+  auto finish = [this, notification = env.notification, id = env.id, done = std::move(done), whole](
                     std::optional<Result> result, std::optional<json> error) {
     if (error) ++errors_;
     if (notification) {
-      done(std::nullopt);
+      done(std::string());
       return;
     }
-    done(error ? error_response(id, std::move(*error)).dump(-1, ' ', false, kInvalidUtf8) : response_text(id, std::move(*result)));
+    auto r = error ? error_response(id, std::move(*error)).dump(-1, ' ', false, kInvalidUtf8)
+                   : response_text(id, std::move(*result));
+    if (whole && r.size() > limits_.max_response_bytes) {
+      ++errors_;
+      r = too_large_text(id.is_string() || id.is_number() ? id : json(nullptr), r.size(), limits_.max_response_bytes);
+    }
+    done(std::move(r));
   };
   const auto it = methods_.find(env.method);
   if (it == methods_.end()) {

@@ -385,22 +385,52 @@ class StopOnSignal {
   std::thread stopper_;
 };
 
-// Runs the io threads until the io_context stops: config.io_threads in all, this one included.
-void run_io(asio::io_context& io, int threads) {
-  std::vector<std::thread> more;
-  for (int i = 1; i < threads; ++i)
-    more.emplace_back([&io] {
-      yield_to_measurement();
-      rpc::mark_network_thread();
-      io.run();
-    });
-  // Everything that keeps the daemon's priority is started by now: this thread's lower
-  // priority is inherited only by what it starts from here on (the stopper at shutdown).
-  yield_to_measurement();
-  rpc::mark_network_thread();
-  io.run();
-  for (auto& t : more) t.join();
-}
+// The network threads: `main` (listeners, signals, timers, the webhook) and, with
+// server.io_threads = N > 1, N - 1 io_contexts more, one thread each. Each connection is
+// given to one of them in turn and stays there, so its handlers run one at a time on one
+// thread with no strand, no lock shared with the other threads and no hand-off between them:
+// one io_context run by two threads woke the other thread for each burst of completions,
+// ~6 µs more of goniod's CPU per request than one thread (gonio-load, daemon/README.md).
+class IoThreads {
+ public:
+  IoThreads(asio::io_context& main, int threads) : main_(main) {
+    for (int i = 1; i < threads; ++i) more_.push_back(std::make_unique<asio::io_context>(1));
+  }
+
+  // The executor of the next connection.
+  asio::any_io_executor next() {
+    const auto i = next_.fetch_add(1, std::memory_order_relaxed) % (more_.size() + 1);
+    if (i == 0) return main_.get_executor();
+    return more_[i - 1]->get_executor();
+  }
+
+  // Runs every thread, this one on `main`, until `main` stops; then stops the others.
+  void run() {
+    using Guard = asio::executor_work_guard<asio::io_context::executor_type>;
+    std::vector<Guard> guards;
+    std::vector<std::thread> threads;
+    for (auto& io : more_) {
+      guards.emplace_back(io->get_executor());
+      threads.emplace_back([&io = *io] {
+        yield_to_measurement();
+        rpc::mark_network_thread();
+        io.run();
+      });
+    }
+    // Everything that keeps the daemon's priority is started by now: this thread's lower
+    // priority is inherited only by what it starts from here on (the stopper at shutdown).
+    yield_to_measurement();
+    rpc::mark_network_thread();
+    main_.run();
+    for (auto& io : more_) io->stop();
+    for (auto& t : threads) t.join();
+  }
+
+ private:
+  asio::io_context& main_;
+  std::vector<std::unique_ptr<asio::io_context>> more_;
+  std::atomic<std::size_t> next_{0};
+};
 
 }  // namespace
 
@@ -487,6 +517,7 @@ int run_daemon(const DaemonOptions& o) {
     start_telemetry(telemetry, config, hub);
 
     asio::io_context io;
+    IoThreads io_threads(io, config.io_threads);
     // Declared before the pools that wait on it, so that it outlives them.
     rpc::ClientGovernor governor({.busy_share = config.client_share_busy});
     asio::thread_pool workers(config.rpc_threads);
@@ -532,7 +563,10 @@ int run_daemon(const DaemonOptions& o) {
                       [&governor](JsonWriter& w) { governor.write_stats(w); }};
     register_methods(dispatcher, services);
 
-    const net::Context ctx{dispatcher, hub, auth, net::Limits::from(config), net_stats, load_dashboard(config)};
+    const net::Context ctx{dispatcher, hub,
+                           auth,       net::Limits::from(config),
+                           net_stats,  load_dashboard(config),
+                           [&io_threads] { return io_threads.next(); }};
     try {
       open_listeners(io, config, state, ctx, listeners);
     } catch (const Error& e) {
@@ -575,7 +609,7 @@ int run_daemon(const DaemonOptions& o) {
                static_cast<int>(::getpid()));
     spdlog::info("goniod {} ready (state dir {})", GONIO_VERSION_STRING, state.string());
 
-    run_io(io, config.io_threads);
+    io_threads.run();
 
     // ---- shutdown
     stop.join();

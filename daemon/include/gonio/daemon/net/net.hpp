@@ -27,10 +27,14 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange without it
+
+#include <boost/asio/any_io_executor.hpp>
 #include <nlohmann/json.hpp>
 
 #include "gonio/daemon/config/config.hpp"
@@ -88,6 +92,9 @@ struct Context {
   Limits limits;
   NetStats& stats;
   std::shared_ptr<const WebRoot> web;  // the dashboard, served by GET on HTTP listeners
+  // The executor each new connection runs on (goniod: one of its io threads' own
+  // io_contexts, in turn). Unset: a strand of the listener's io_context.
+  std::function<boost::asio::any_io_executor()> connection_executor;
 };
 
 class Listener {

@@ -169,9 +169,11 @@ class Dispatcher {
 
  private:
   struct Pending;
-  // `done` gets the serialised response object, or nullopt for none.
+  // `done` gets the serialised response object, or an empty string for none. `whole`: the
+  // request is the whole message (not a batch element), so its answer is held to
+  // max_response_bytes here (a batch's elements are held to it together, in pump).
   void handle_one(nlohmann::json& request, const std::shared_ptr<Session>& session,
-                  std::function<void(std::optional<std::string>)> done) const;
+                  std::function<void(std::string)> done, bool whole) const;
   void pump(const std::shared_ptr<Pending>& p, const std::shared_ptr<Session>& session) const;
 
   Executor blocking_, control_;
