@@ -283,7 +283,7 @@ void server_keys(std::vector<ConfigKey>& k) {
   k.push_back(listen_key());
   k.push_back(boolean("server", "allow_remote", field(&C::allow_remote),
                       "allow TCP/HTTP on non-loopback addresses"));
-  k.push_back(integer("server", "io_threads", field(&C::io_threads), 1, 64, "network threads"));
+  k.push_back(integer("server", "io_threads", field(&C::io_threads), 1, 64, "network threads (an event loop each; a connection stays on one)"));
   k.push_back(integer("server", "rpc_threads", field(&C::rpc_threads), 1, 64,
                       "workers for blocking methods (instrument, twin, export)"));
   k.push_back(number("server", "client_share_busy", field(&C::client_share_busy), 0, 64,
