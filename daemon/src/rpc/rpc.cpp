@@ -397,14 +397,22 @@ void invoke(const Method& method, Call call, Finish& finish) {
 
 }  // namespace
 
+std::string Dispatcher::within_limit(std::string r, const json& id) const {
+  if (r.size() <= limits_.max_response_bytes) return r;
+  ++errors_;
+  return too_large_text(id.is_string() || id.is_number() ? id : json(nullptr), r.size(), limits_.max_response_bytes);
+}
+
 void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
                             std::function<void(std::string)> done, bool whole) const {
   ++requests_;
   Envelope env = read_envelope(req);
   if (env.error) {
     ++errors_;
-    done(env.answer_error ? error_response(env.id, std::move(*env.error)).dump(-1, ' ', false, kInvalidUtf8)
-                          : std::string());
+    if (!env.answer_error) done(std::string());
+    else if (auto r = error_response(env.id, std::move(*env.error)).dump(-1, ' ', false, kInvalidUtf8); whole)
+      done(within_limit(std::move(r), env.id));
+    else done(std::move(r));
     return;
   }
   // From here on, notifications get no answer whatever happens.
@@ -417,11 +425,7 @@ void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
     }
     auto r = error ? error_response(id, std::move(*error)).dump(-1, ' ', false, kInvalidUtf8)
                    : response_text(id, std::move(*result));
-    if (whole && r.size() > limits_.max_response_bytes) {
-      ++errors_;
-      r = too_large_text(id.is_string() || id.is_number() ? id : json(nullptr), r.size(), limits_.max_response_bytes);
-    }
-    done(std::move(r));
+    done(whole ? within_limit(std::move(r), id) : std::move(r));
   };
   const auto it = methods_.find(env.method);
   if (it == methods_.end()) {

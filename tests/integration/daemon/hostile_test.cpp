@@ -86,6 +86,30 @@ TEST(Hostile, ResponsesOverTheLimitBecomeErrorsNotPartialReplies) {
   }
 }
 
+TEST(Hostile, ASingleAnswerOverTheLimitBecomesAnErrorWithItsId) {
+  TempDir dir;
+  Goniod g(dir.path, with_server("max_response_bytes = 65536\n"));
+  auto c = g.unix_conn();
+  const std::string long_name(40000, 'x');
+  // Refusals quote what they refuse: a 40 kB unknown member (named twice, in the message and
+  // in data.field) or method name makes an answer over the limit, refused before or after
+  // dispatch.
+  c.send_raw(json{{"jsonrpc", "2.0"}, {"id", 7}, {"method", "system.info"}, {long_name, 1}}.dump() + "\n");
+  c.send_raw(json{{"jsonrpc", "2.0"}, {"id", "m"}, {"method", long_name + long_name}}.dump() + "\n");
+  for (const json& id : {json(7), json("m")}) {
+    const auto line = c.line();
+    ASSERT_TRUE(line);
+    const auto r = json::parse(*line);
+    EXPECT_EQ(r["id"], id) << r.dump().substr(0, 200);
+    EXPECT_EQ(r["error"]["code"], -32008) << r.dump().substr(0, 200);
+    EXPECT_NE(r["error"]["message"].get<std::string>().find("max_response_bytes"), std::string::npos);
+  }
+  // The connection still answers within the limit.
+  c.send_raw(json{{"jsonrpc", "2.0"}, {"id", 8}, {"method", "system.info"}}.dump() + "\n");
+  const auto ok = json::parse(*c.line());
+  EXPECT_TRUE(ok.contains("result"));
+}
+
 TEST(Hostile, APeerThatDoesNotReadIsDroppedAndCounted) {
   TempDir dir;
   Goniod g(dir.path, with_server("max_queue_bytes = 65536\nwrite_timeout_s = 1\n"));

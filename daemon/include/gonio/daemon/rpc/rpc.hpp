@@ -175,6 +175,9 @@ class Dispatcher {
   void handle_one(nlohmann::json& request, const std::shared_ptr<Session>& session,
                   std::function<void(std::string)> done, bool whole) const;
   void pump(const std::shared_ptr<Pending>& p, const std::shared_ptr<Session>& session) const;
+  // A whole message's answer `r` to the request with `id`, or the error that says it is
+  // larger than max_response_bytes.
+  std::string within_limit(std::string r, const nlohmann::json& id) const;
 
   Executor blocking_, control_;
   DispatchLimits limits_;
