@@ -530,10 +530,7 @@ json measure_throughput(Client& admin, const Options& o, const std::string& uri,
     loaded_points += done() - a;
     loaded_s += r.seconds;
     if (round == kRounds - 1) governor = admin.call("system.info")["governor"];
-    all.latency_ms.insert(all.latency_ms.end(), r.latency_ms.begin(), r.latency_ms.end());
-    all.requests += r.requests;
-    all.errors += r.errors;
-    all.seconds += r.seconds;
+    pool(all, std::move(r));
   }
   std::sort(all.latency_ms.begin(), all.latency_ms.end());
   results.push_back(std::move(all));
@@ -654,7 +651,8 @@ void print(const Report& rep, const Options& o) {
     const auto& e = out[0];
     for (std::size_t i = 1; i < out.size(); ++i) {
       const auto& r = out[i];
-      if (r["target"] == "scan.points") continue;  // not a baseline's kind of call
+      // Only the targets measured in rounds beside echo, calling what echo is called with.
+      if (r["target"] != "replay (system.info's bytes)" && r["target"] != "system.info") continue;
       const double tp = r["throughput_rps"].get<double>() / e["throughput_rps"].get<double>();
       const double p50 = r["p50_ms"].get<double>() / e["p50_ms"].get<double>();
       const double p99 = r["p99_ms"].get<double>() / e["p99_ms"].get<double>();
@@ -754,7 +752,7 @@ void run(Options o) {
                             [&] { return replay.cpu_seconds(); }, 0));
     pool(pooled[2], measure("system.info", uri, token, info, s, goniod_cpu, idle_rate));
   }
-  rep.results = pooled;
+  rep.results = std::move(pooled);
   if (rep.scan_id)
     rep.results.push_back(measure("scan.points", uri, token,
                                   {{"scan.points", json{{"scan", rep.scan_id}, {"offset", 0}, {"limit", 10}}}},
