@@ -39,6 +39,9 @@ class WsSession;
 struct HttpState {
   Context ctx;
   std::atomic<std::size_t> connections{0}, accepted{0}, dropped{0}, websockets{0};
+  // Connections close() asked to end that have not ended yet (a WebSocket: its closing
+  // handshake); shutdown waits a moment for them.
+  std::atomic<std::size_t> ending{0};
   std::mutex mu;
   std::vector<std::weak_ptr<WsSession>> ws;  // for ending the sessions of a revoked token
   // Who to close on shutdown; expired entries are pruned as new ones arrive.
@@ -152,7 +155,10 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
         [](websocket::response_type& res) { res.set(http::field::server, "goniod"); }));
     auto self = shared_from_this();
     st_->add_closer(self, [w = std::weak_ptr<WsSession>(self)] {
-      if (auto s = w.lock()) asio::post(s->ws_.get_executor(), [s] { s->close("the server is stopping"); });
+      auto s = w.lock();
+      if (!s) return;
+      ++s->st_->ending;  // counted before it runs: shutdown waits for it
+      asio::post(s->ws_.get_executor(), [s] { s->going_away(); });
     });
     {
       std::lock_guard lock(st_->mu);
@@ -197,6 +203,27 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
   }
 
  private:
+  // The server is stopping: a Close frame with 1001, "going away" (RFC 6455 §7.4.1), then
+  // the peer's own Close is read and Beast's teardown ends the TCP connection. Ending it
+  // without the handshake could leave the peer's last frames unread, and closing a socket
+  // with unread data resets it: a browser reports a reset connection as an error, a clean
+  // close as a reason to reconnect.
+  void going_away() {
+    if (closed_ || closing_ || !ws_.is_open()) {
+      close("the server is stopping");
+      --st_->ending;
+      return;
+    }
+    closing_ = true;
+    login_timer_.cancel();
+    read_timer_.cancel();
+    ws_.async_close(websocket::close_reason(websocket::close_code::going_away, "the server is stopping"),
+                    [self = shared_from_this()](const error_code& ec) {
+                      self->close(ec ? ec.message() : "the server is stopping");
+                      --self->st_->ending;
+                    });
+  }
+
   void slow_reader(const std::string& why) {
     if (closed_) return;
     ++stats_.slow_readers;
@@ -204,7 +231,7 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
   }
 
   bool may_read() const {
-    return !closed_ && in_flight_ < limits_.max_in_flight && !out_.backed_up();
+    return !closed_ && !closing_ && in_flight_ < limits_.max_in_flight && !out_.backed_up();
   }
 
   // Frames are read one at a time so that a message that has started must complete within
@@ -214,7 +241,9 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
     reading_ = true;
     ws_.async_read_some(buffer_, limits_.max_message_bytes, [self = shared_from_this()](const error_code& ec, std::size_t) {
       self->reading_ = false;
-      if (self->closed_) return;
+      // Closing: a request that came before the peer's Close frame goes unanswered, and the
+      // close operation ends the session.
+      if (self->closed_ || self->closing_) return;
       if (ec) {
         if (ec == websocket::error::message_too_big) {
           ++self->st_->dropped;
@@ -268,7 +297,7 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
   }
 
   void do_write() {
-    if (writing_ || out_.empty() || closed_) return;
+    if (writing_ || out_.empty() || closed_ || closing_) return;
     writing_ = true;
     write_deadline_.started([self = shared_from_this()] { return !self->closed_ && self->writing_; },
                             [self = shared_from_this()](const std::string& why) { self->slow_reader(why); });
@@ -310,6 +339,7 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
   beast::flat_buffer buffer_;
   std::atomic<bool> closed_flag_{false};
   bool reading_ = false, writing_ = false, closed_ = false, message_started_ = false;
+  bool closing_ = false;  // our Close frame is sent or on its way: nothing else is written
   std::size_t in_flight_ = 0;
 };
 
@@ -328,12 +358,15 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
   void start() {
     auto self = shared_from_this();
     st_->add_closer(self, [w = std::weak_ptr<HttpSession>(self)] {
-      if (auto s = w.lock())
-        asio::post(s->stream_.get_executor(), [s] {
-          error_code ignored;
-          s->stream_.socket().shutdown(tcp::socket::shutdown_both, ignored);
-          s->stream_.close();
-        });
+      auto s = w.lock();
+      if (!s) return;
+      ++s->st_->ending;
+      asio::post(s->stream_.get_executor(), [s] {
+        error_code ignored;
+        s->stream_.socket().shutdown(tcp::socket::shutdown_both, ignored);
+        s->stream_.close();
+        --s->st_->ending;
+      });
     });
     do_read();
   }
@@ -584,6 +617,8 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
       s->end(fmt::format("the token '{}' was revoked", name));
     }
   }
+
+  bool closing() const override { return st_->ending.load() > 0; }
 
   void write_stats(JsonWriter& w) const override {
     w.member("endpoint", endpoint_)

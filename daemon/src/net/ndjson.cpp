@@ -42,6 +42,7 @@ struct ListenerState {
   Context ctx;
   std::string kind;  // "unix", "tcp"
   std::atomic<std::size_t> connections{0}, accepted{0}, dropped{0};
+  std::atomic<std::size_t> ending{0};  // sessions close() asked to end that have not yet
   std::mutex mu;
   std::vector<std::weak_ptr<rpc::Session>> sessions;
   explicit ListenerState(const Context& c, std::string k) : ctx(c), kind(std::move(k)) {}
@@ -95,7 +96,11 @@ class NdjsonSession final : public rpc::Session,
   }
 
   void shutdown() {
-    asio::post(socket_.get_executor(), [self = this->shared_from_this()] { self->close("the server is stopping"); });
+    ++ls_->ending;  // counted before it runs: shutdown waits for it
+    asio::post(socket_.get_executor(), [self = this->shared_from_this()] {
+      self->close("the server is stopping");
+      --self->ls_->ending;
+    });
   }
 
   void end(const std::string& why) {
@@ -432,6 +437,8 @@ class NdjsonListener final : public Listener,
     for (auto& w : sessions)
       if (auto s = w.lock()) std::static_pointer_cast<NdjsonSession<Protocol>>(s)->shutdown();
   }
+
+  bool closing() const override { return ls_->ending.load() > 0; }
 
   void write_stats(JsonWriter& w) const override {
     w.member("endpoint", endpoint_)

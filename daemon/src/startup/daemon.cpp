@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <csignal>
 #include <cstring>
 #include <fstream>
@@ -354,7 +355,10 @@ void audit_self(Store& store, const std::string& action, const json& detail) {
 
 // SIGTERM and SIGINT: the listeners close, the point in progress is finished and the scan
 // parked, then the io threads stop. Parking may wait for a device: it runs on a thread of
-// its own, off the network threads.
+// its own, off the network threads. Connections asked to close get up to kCloseGrace more
+// to end (a WebSocket's peer answers the server's Close frame); one that has not is cut off.
+constexpr auto kCloseGrace = std::chrono::seconds(2);
+
 class StopOnSignal {
  public:
   StopOnSignal(asio::io_context& io, std::vector<std::shared_ptr<net::Listener>>& listeners,
@@ -368,6 +372,12 @@ class StopOnSignal {
       for (auto& l : listeners_) l->close();
       stopper_ = std::thread([this] {
         instrument_.shutdown();
+        const auto closing = [this] {
+          return std::any_of(listeners_.begin(), listeners_.end(), [](const auto& l) { return l->closing(); });
+        };
+        for (const auto end = std::chrono::steady_clock::now() + kCloseGrace;
+             closing() && std::chrono::steady_clock::now() < end;)
+          std::this_thread::sleep_for(std::chrono::milliseconds(5));
         io_.stop();
       });
     });
@@ -404,10 +414,13 @@ class IoThreads {
     return more_[i - 1]->get_executor();
   }
 
-  // Runs every thread, this one on `main`, until `main` stops; then stops the others.
+  // Runs every thread, this one on `main`, until `main` is stopped (at shutdown, once the
+  // connections have ended); then stops the others. `main` is held to run until then: when
+  // its listeners close it may have no work left while connections on the others still end.
   void run() {
     using Guard = asio::executor_work_guard<asio::io_context::executor_type>;
     std::vector<Guard> guards;
+    guards.emplace_back(main_.get_executor());
     std::vector<std::thread> threads;
     for (auto& io : more_) {
       guards.emplace_back(io->get_executor());

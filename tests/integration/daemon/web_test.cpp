@@ -94,5 +94,44 @@ TEST(Web, WithoutADashboardTheListenerServesOnlyTheApi) {
   EXPECT_EQ(http(g.http_port(), "POST", "/rpc", R"({"jsonrpc":"2.0","id":1,"method":"rpc.discover"})").status, 200);
 }
 
+// A browser told of a restart by a clean close reconnects; one whose connection is reset
+// reports an error. On SIGTERM every WebSocket gets a Close frame with 1001 (going away), the
+// peer's answer is read, and the TCP connection ends with a FIN, even when the peer sent a
+// request just before it saw the Close frame. Two WebSockets opened one after the other sit
+// on the two io threads (one each, in turn); the test keeps each of them alone in turn, so
+// one run has its only WebSocket off the main io thread, whose listeners close first.
+TEST(Web, AStoppingServerClosesItsWebSocketsWithGoingAway) {
+  for (int keep = 0; keep < 2; ++keep) {
+    TempDir dir;
+    // Long enough that no timeout of goniod's ends a closing handshake in its place.
+    auto cfg = mock_config({});
+    cfg.replace(cfg.find("read_timeout_s = 1\n"), 19, "read_timeout_s = 60\n");
+    Goniod g(dir.path, cfg);
+    auto a = std::make_unique<WebSocket>(g.http_port(), g.admin_token());
+    auto b = std::make_unique<WebSocket>(g.http_port(), g.admin_token());
+    ASSERT_EQ(a->status, 101);
+    ASSERT_EQ(b->status, 101);
+    auto gone = std::move(keep == 0 ? b : a);
+    auto ws = std::move(keep == 0 ? a : b);
+    gone->send_close(1000);  // a tab closed before the restart
+    while (gone->read_text()) {
+    }
+    EXPECT_EQ(gone->close_code, 1000);
+    EXPECT_TRUE(gone->ends_cleanly());
+    gone.reset();  // its socket closed: nothing of it is left on its io thread
+    ASSERT_TRUE(ws->call("subscribe", {{"topics", {"alerts"}}}).contains("result"));
+    ASSERT_EQ(::kill(g.pid(), SIGTERM), 0);
+    ws->send_text(R"({"jsonrpc":"2.0","id":99,"method":"system.info"})");
+    while (ws->read_text()) {
+    }  // an answer that may have come before the Close frame
+    EXPECT_EQ(ws->close_code, 1001) << "keep " << keep;
+    std::this_thread::sleep_for(300ms);  // a browser answers when its page gets to it
+    ws->send_close(1001);
+    EXPECT_TRUE(ws->ends_cleanly()) << "keep " << keep;
+    ws.reset();  // as a browser does once the server has closed
+    EXPECT_EQ(g.stop(0), 0) << g.log_text();  // the first SIGTERM's clean exit
+  }
+}
+
 }  // namespace
 }  // namespace gonio::test

@@ -102,6 +102,10 @@ class Listener {
   virtual ~Listener() = default;
   virtual std::string endpoint() const = 0;  // the bound URI (real port when 0 was asked)
   virtual void close() = 0;                  // stops accepting and closes every connection
+  // Whether connections that close() asked to end have not ended yet (a WebSocket ends with
+  // its closing handshake: the peer answers the server's Close frame). Shutdown waits a
+  // moment for them before the io threads stop.
+  virtual bool closing() const = 0;
   // The members of its system.info "transport" entry: endpoint, connections, accepted,
   // dropped (and websockets on HTTP).
   virtual void write_stats(JsonWriter& w) const = 0;

@@ -250,9 +250,32 @@ class WebSocket {
   }
   int status = 0;
 
-  void send_text(const std::string& text) {
+  void send_text(const std::string& text) { send_frame(0x1, text); }
+  // A Close frame with `code`, as a browser answers the server's.
+  void send_close(int code) {
+    send_frame(0x8, std::string{static_cast<char>(code >> 8), static_cast<char>(code & 0xff)});
+  }
+  // The status code of the Close frame goniod sent, once read_text met it.
+  std::optional<int> close_code;
+  // After the closing handshake: whether the TCP connection ends with an orderly FIN within
+  // `timeout` (recv returns 0), not a reset (ECONNRESET), which a browser reports as an error.
+  bool ends_cleanly(std::chrono::milliseconds timeout = 10s) {
+    const auto end = Clock::now() + timeout;
+    for (;;) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now()).count();
+      if (left <= 0) return false;
+      pollfd p{c_.fd(), POLLIN, 0};
+      if (::poll(&p, 1, static_cast<int>(left)) <= 0) continue;
+      char b[4096];
+      const auto r = ::recv(c_.fd(), b, sizeof b, 0);
+      if (r == 0) return true;
+      if (r < 0) return false;
+    }
+  }
+
+  void send_frame(int opcode, const std::string& text) {
     std::string f;
-    f += static_cast<char>(0x81);
+    f += static_cast<char>(0x80 | opcode);
     const std::size_t n = text.size();
     if (n < 126) f += static_cast<char>(0x80 | n);
     else if (n < 65536) {
@@ -286,7 +309,12 @@ class WebSocket {
       std::string payload;
       if (!read_exact(static_cast<std::size_t>(n), payload, timeout)) return std::nullopt;
       if (op == 0x1) return payload;
-      if (op == 0x8) return std::nullopt;
+      if (op == 0x8) {  // Close: its status code (RFC 6455 §5.5.1), 1005 when it has none
+        close_code = payload.size() >= 2
+                         ? (static_cast<unsigned char>(payload[0]) << 8) | static_cast<unsigned char>(payload[1])
+                         : 1005;
+        return std::nullopt;
+      }
       // pings, pongs: ignore
     }
   }
@@ -408,7 +436,8 @@ class Goniod {
     std::ifstream in(state_ / "endpoints.json");
     endpoints_ = json::parse(in);
   }
-  // Signals goniod and waits for it; returns the exit status (128+sig when killed).
+  // Signals goniod (sig 0: sends nothing) and waits for it; returns the exit status (128+sig
+  // when killed).
   int stop(int sig = SIGTERM, std::chrono::milliseconds timeout = 20s) {
     ::kill(pid_, sig);
     int status = 0;
