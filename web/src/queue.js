@@ -25,9 +25,9 @@ export function SubmitForm({ samples, call, onSubmitted }) {
   const submit = async (e) => {
     e.preventDefault();
     setBusy(true);
+    setErrors({}); // the last attempt's errors go: this one's answer brings its own
     try {
       const scan = await call('scan.submit', submitParams({ ...form, sample }));
-      setErrors({});
       onSubmitted(scan);
     } catch (err) {
       const fe = submitErrors(err);
