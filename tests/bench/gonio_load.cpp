@@ -19,7 +19,9 @@
 // Wall times are measured, never asserted.
 //
 // --hostile adds what an attacker (or a clumsy script) does, against a goniod it started
-// itself, and reports goniod's peak RSS (VmHWM) after each phase:
+// itself, and reports goniod's peak RSS (VmHWM) in each phase, the peak reset to the RSS at
+// its start (and that RSS beside it), so that a phase's peak is its own and not that of the
+// load phases before it:
 //   single   one request at a time, each up to max_message_bytes: a 1 MB batch of
 //            rpc.discover and one of {} (no login), a 1 MB line of tiny values, the largest
 //            allowed batch of rpc.discover, 128 pages of 1000 points, a scan.export
@@ -252,6 +254,23 @@ double peak_rss_mib(pid_t pid) {
   while (std::getline(in, l))
     if (l.starts_with("VmHWM:")) return std::stod(l.substr(6)) / 1024.0;
   return NAN;
+}
+
+double rss_mib(pid_t pid) {
+  std::ifstream in(fmt::format("/proc/{}/status", pid));
+  std::string l;
+  while (std::getline(in, l))
+    if (l.starts_with("VmRSS:")) return std::stod(l.substr(6)) / 1024.0;
+  return NAN;
+}
+
+// Resets the peak (VmHWM) to the current RSS: "5" to /proc/PID/clear_refs (proc(5), Linux
+// 4.0 and later). False when refused: the peak then covers the process's whole life.
+bool reset_peak_rss(pid_t pid) {
+  std::ofstream out(fmt::format("/proc/{}/clear_refs", pid));
+  out << "5";
+  out.flush();
+  return static_cast<bool>(out);
 }
 
 std::string batch_of(const std::string& element, std::size_t bytes) {
@@ -591,12 +610,16 @@ json measure_hostile(Client& admin, const Goniod& g, std::int64_t scan, double s
   json out = json::object();
   Hostile h{g.uri(), g.token(), scan};
   json single = json::array();
+  out["peak_reset"] = reset_peak_rss(g.pid());
+  out["single_start_rss_mib"] = rss_mib(g.pid());
   for (int kind = 0; kind <= 5; ++kind) {
     h.act(kind);
     single.push_back(json{{"kind", kind}, {"peak_rss_mib", peak_rss_mib(g.pid())}});
   }
   out["single_peak_rss_mib"] = peak_rss_mib(g.pid());
   std::atomic<std::size_t> acts{0};
+  out["peak_reset"] = reset_peak_rss(g.pid()) && out["peak_reset"].get<bool>();
+  out["flood_start_rss_mib"] = rss_mib(g.pid());
   {
     std::vector<std::thread> ts;
     const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
@@ -691,11 +714,13 @@ void print(const Report& rep, const Options& o) {
   if (const auto& h = rep.hostile; !h.empty()) {
     const auto& ctl = h["control"];
     std::cout << fmt::format(
-        "hostile: goniod peak RSS {:.1f} MiB after single requests, {:.1f} MiB after {} clients "
-        "({} acts); scan.pause under {} export viewers ({} exports): p50 {:.2f} ms, p99 {:.2f} ms, "
+        "hostile: goniod peak RSS {:.1f} MiB in single requests (from {:.1f}), {:.1f} MiB in {} clients "
+        "({} acts, from {:.1f}){}; scan.pause under {} export viewers ({} exports): p50 {:.2f} ms, p99 {:.2f} ms, "
         "max {:.2f} ms ({} pauses); net {}\n",
-        h["single_peak_rss_mib"].get<double>(), h["flood_peak_rss_mib"].get<double>(), h["flood_clients"].get<int>(),
-        h["flood_acts"].get<std::size_t>(), ctl["viewers"].get<int>(), ctl["exports"].get<std::size_t>(),
+        h["single_peak_rss_mib"].get<double>(), h["single_start_rss_mib"].get<double>(),
+        h["flood_peak_rss_mib"].get<double>(), h["flood_clients"].get<int>(), h["flood_acts"].get<std::size_t>(),
+        h["flood_start_rss_mib"].get<double>(),
+        h["peak_reset"].get<bool>() ? "" : " (peaks not reset: the kernel refused; each covers goniod's life)", ctl["viewers"].get<int>(), ctl["exports"].get<std::size_t>(),
         ctl["pause_p50_ms"].get<double>(), ctl["pause_p99_ms"].get<double>(), ctl["pause_max_ms"].get<double>(),
         ctl["pauses"].get<std::size_t>(), h["net"].dump());
   }
