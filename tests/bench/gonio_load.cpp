@@ -247,22 +247,17 @@ class Raw {
   std::string buf_;
 };
 
-// Peak resident memory of a process (VmHWM) in MiB; NAN when unknown.
-double peak_rss_mib(pid_t pid) {
+// A memory figure of a process's /proc/PID/status (a "kB" line such as "VmHWM:") in MiB;
+// NAN when unknown.
+double status_mib(pid_t pid, std::string_view field) {
   std::ifstream in(fmt::format("/proc/{}/status", pid));
   std::string l;
   while (std::getline(in, l))
-    if (l.starts_with("VmHWM:")) return std::stod(l.substr(6)) / 1024.0;
+    if (l.starts_with(field)) return std::stod(l.substr(field.size())) / 1024.0;
   return NAN;
 }
-
-double rss_mib(pid_t pid) {
-  std::ifstream in(fmt::format("/proc/{}/status", pid));
-  std::string l;
-  while (std::getline(in, l))
-    if (l.starts_with("VmRSS:")) return std::stod(l.substr(6)) / 1024.0;
-  return NAN;
-}
+double peak_rss_mib(pid_t pid) { return status_mib(pid, "VmHWM:"); }
+double rss_mib(pid_t pid) { return status_mib(pid, "VmRSS:"); }
 
 // Resets the peak (VmHWM) to the current RSS: "5" to /proc/PID/clear_refs (proc(5), Linux
 // 4.0 and later). False when refused: the peak then covers the process's whole life.
