@@ -31,6 +31,9 @@ namespace {
 // and a bsdf or ssdd table, which needs the whole scan at once.
 constexpr std::size_t kMaxChunkValues = 32768;
 constexpr std::size_t kMaxTableValues = 262144;
+// Room left after an answer written as text for the JSON-RPC envelope around it (its head,
+// the id and the closing brace; an id longer than that costs one copy).
+constexpr std::size_t kEnvelopeRoom = 128;
 
 enum class Control { pause, resume, cancel };
 
@@ -173,19 +176,30 @@ rpc::Result scan_export(Services& s, rpc::Call& c) {
     limit = read_count(r, "limit", per_chunk, per_chunk);
   }
   r.finish();
-  const auto points = s.store.points(id, offset, limit);
-  const std::size_t end = offset + points.size();
-  const bool last = table || end >= scan.points_done;
-  auto e = table ? export_scan(scan, points, format) : export_chunk(scan, points, format, offset, last);
-  // Spliced: the content is escaped once, straight into the response.
+  // A chunk's answer is megabytes and many clients may export at once: the points go once
+  // the content is written, the content once it is escaped, and the answer has room for its
+  // envelope, so that it is wrapped where it lies (response_text). At most two copies of the
+  // content are in memory at a time.
+  ExportResult e;
+  std::size_t end = offset;
+  bool last = table;
+  {
+    const auto points = s.store.points(id, offset, limit);
+    end = offset + points.size();
+    last = table || end >= scan.points_done;
+    e = table ? export_scan(scan, points, format) : export_chunk(scan, points, format, offset, last);
+  }
+  const std::string content = json(std::move(e.content)).dump();
   std::string out = json{{"scan", id}, {"format", e.format}, {"filename", e.filename},
-                         {"media_type", e.media_type}, {"offset", offset}, {"points", points.size()},
+                         {"media_type", e.media_type}, {"offset", offset}, {"points", end - offset},
                          {"points_done", scan.points_done},
                          {"next_offset", last ? json(nullptr) : json(end)}}
                         .dump();
   out.pop_back();
-  out += R"(,"content":)";
-  out += json(std::move(e.content)).dump();
+  constexpr std::string_view kContent = R"(,"content":)";
+  out.reserve(out.size() + kContent.size() + content.size() + 1 + kEnvelopeRoom);
+  out += kContent;
+  out += content;
   out += '}';
   return rpc::RawJson{std::move(out)};
 }
