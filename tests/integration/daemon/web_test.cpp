@@ -105,7 +105,8 @@ TEST(Web, AStoppingServerClosesItsWebSocketsWithGoingAway) {
     TempDir dir;
     // Long enough that no timeout of goniod's ends a closing handshake in its place.
     auto cfg = mock_config({});
-    cfg.replace(cfg.find("read_timeout_s = 1\n"), 19, "read_timeout_s = 60\n");
+    const std::string harness_timeout = "read_timeout_s = 1\n";
+    cfg.replace(cfg.find(harness_timeout), harness_timeout.size(), "read_timeout_s = 60\n");
     Goniod g(dir.path, cfg);
     auto a = std::make_unique<WebSocket>(g.http_port(), g.admin_token());
     auto b = std::make_unique<WebSocket>(g.http_port(), g.admin_token());
