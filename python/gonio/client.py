@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import inspect
 import os
-import select
 import threading
 import time
 
@@ -72,22 +71,25 @@ def checked_params(spec: schema.Method, params: dict) -> dict:
 
 
 class Client:
-    """A connection to goniod. url: unix:PATH, unix://PATH, tcp://HOST:PORT or
-    http://HOST:PORT (default: the state dir's socket). token / token_file: the bearer token
-    for TCP and HTTP (default: <state_dir>/admin.token when readable). timeout: seconds per
-    call; reconnect: seconds to keep trying when the link drops (0: never)."""
+    """A connection to goniod. url: unix:PATH, unix://PATH, tcp://HOST:PORT,
+    http://HOST:PORT, tls://HOST:PORT or https://HOST:PORT (default: the state dir's
+    socket). token / token_file: the bearer token for TCP, TLS and HTTP (default:
+    <state_dir>/admin.token when readable). ca: the CA file that goniod's certificate is
+    verified by (tls://, https://; default: the system's CAs); cert, key: a client
+    certificate, whose CN names a token on goniod, instead of the token. timeout: seconds
+    per call; reconnect: seconds to keep trying when the link drops (0: never)."""
 
     def __init__(self, url: str | None = None, *, token: str | None = None,
                  token_file: str | os.PathLike | None = None, state_dir: str | None = None,
-                 timeout: float = 30.0, reconnect: float = 30.0, ca: str | None = None):
+                 timeout: float = 30.0, reconnect: float = 30.0, ca: str | None = None,
+                 cert: str | None = None, key: str | None = None):
         self.state_dir = str(state_dir or default_state_dir())
         self.url = url or f"unix:{self.state_dir}/goniod.sock"
         self.address = transport.parse_url(self.url)
         self.timeout = float(timeout)
         self.reconnect = float(reconnect)
-        # TLS hook: a CA bundle to verify goniod's certificate by, for tls:// and https://
-        # (parse_url refuses those until goniod serves TLS).
-        self.ca = ca
+        self._tls = transport.tls_context(ca, cert, key) if self.address.secure else None
+        self._certified = bool(cert) and self.address.secure
         self._token, self._explicit_token = self._find_token(token, token_file)
         self._link = None
         self._next_id = 1
@@ -118,28 +120,41 @@ class Client:
     def _open_link(self):
         """A new link, logged in; sets principal."""
         a = self.address
-        if a.scheme != "unix" and not self._token:
+        if a.scheme != "unix" and not self._token and not self._certified:
             raise _unauthorized(f"a token is needed over {a.scheme}: token=, token_file= or a "
                                 f"readable {self.state_dir}/admin.token")
-        if a.scheme == "http":
-            link = transport.HttpLink(a, self.timeout, self._token)
-            self.principal = self._exchange(link, "auth.whoami", {}, time.monotonic() + self.timeout)
-            return link
-        link = transport.open_stream(a, self.timeout, None)
-        if self._explicit_token or a.scheme == "tcp":
+        if a.http:
+            link = transport.HttpLink(a, self.timeout, self._token, self._tls)
             try:
-                self.principal = self._exchange(link, "auth.login", {"token": self._token},
-                                                time.monotonic() + self.timeout)
+                self.principal = self._exchange(link, "auth.whoami", {}, time.monotonic() + self.timeout)
             except Exception:
                 link.close()
                 raise
+            return link
+        link = transport.open_stream(a, self.timeout, None, self._tls)
+        self._log_in(link)
         return link
 
+    def _log_in(self, link) -> None:
+        """auth.login on a new NDJSON link: always over TCP and TLS (unless a client
+        certificate stands for the token), over the Unix socket only with a given token."""
+        if not self._token or (self.address.scheme == "unix" and not self._explicit_token):
+            return
+        try:
+            self.principal = self._exchange(link, "auth.login", {"token": self._token},
+                                            time.monotonic() + self.timeout)
+        except Exception:
+            link.close()
+            raise
+
     def _ensure_link(self):
-        if self._link is not None and not _peer_closed(self._link):
+        if self._link is not None and not self._link.closed_by_peer():
             return self._link
         self._drop()
-        self._link = self._open_link()
+        try:
+            self._link = self._open_link()
+        except ConnectionLost as e:  # the call itself was not sent
+            raise ConnectionLost(str(e), sent=False) from e
         if self.principal is None:
             self.principal = self._exchange(self._link, "auth.whoami", {}, time.monotonic() + self.timeout)
         return self._link
@@ -222,37 +237,15 @@ class Client:
     def _open_stream(self):
         """A fresh link for notifications (over http: a WebSocket), logged in."""
         a = self.address
-        link = transport.open_stream(a, self.timeout, self._token if a.scheme == "http" else None)
-        if a.scheme == "tcp" or (a.scheme == "unix" and self._explicit_token):
-            try:
-                self._exchange(link, "auth.login", {"token": self._token}, time.monotonic() + self.timeout)
-            except Exception:
-                link.close()
-                raise
+        link = transport.open_stream(a, self.timeout, self._token if a.http else None, self._tls)
+        if not a.http:
+            self._log_in(link)
         return link
 
 
 def connect(url: str | None = None, **kwargs) -> Client:
     """gonio.connect("tcp://host:7700", token_file=...) — see Client."""
     return Client(url, **kwargs)
-
-
-def _peer_closed(link) -> bool:
-    """Whether goniod has closed an idle link (read ready with nothing to read), so that a
-    request is never written into a dead connection and counted as sent."""
-    sock = getattr(link, "_sock", None) or getattr(getattr(link, "_conn", None), "sock", None)
-    if sock is None:
-        return False
-    try:
-        ready, _, _ = select.select([sock], [], [], 0)
-        if not ready:
-            return False
-        import socket as _socket
-        return sock.recv(1, _socket.MSG_PEEK | _socket.MSG_DONTWAIT) == b""
-    except BlockingIOError:
-        return False
-    except OSError:
-        return True
 
 
 # ---- the generated methods ----------------------------------------------------------------

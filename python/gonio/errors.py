@@ -62,6 +62,10 @@ class RequestTimeout(GonioError, TimeoutError):
     answer is dropped)."""
 
 
+class TlsError(GonioError):
+    """goniod's certificate could not be verified (tls://, https://): not retried."""
+
+
 class ScanNotCompleted(GonioError):
     """scan.wait: the scan ended other than completed (failed or cancelled). scan: its
     final record (state, reason)."""
@@ -103,5 +107,5 @@ def by_name(name: str) -> type[RpcError]:
     raise KeyError(name)
 
 
-__all__ = ["GonioError", "RpcError", "ConnectionLost", "RequestTimeout", "ScanNotCompleted",
+__all__ = ["GonioError", "RpcError", "ConnectionLost", "RequestTimeout", "TlsError", "ScanNotCompleted",
            "from_answer", "by_name", *(c.__name__ for c in RPC_ERRORS)]

@@ -6,9 +6,10 @@ passes RequestTimeout. Notifications that arrive while a call waits for its answ
 in `notifications`, in order, for whoever subscribed on this link.
 
 URLs: unix:PATH, unix://PATH (unix:///run/gonio/goniod.sock), tcp://HOST:PORT,
-http://HOST:PORT (POST /rpc; subscriptions over ws://HOST:PORT/ws on the same listener).
-tls:// and https:// are where server-verified TLS (a `ca=` bundle) plugs in: `open_link`
-refuses them with a message until goniod serves TLS.
+http://HOST:PORT (POST /rpc; subscriptions over ws://HOST:PORT/ws on the same listener),
+and the same over TLS: tls://HOST:PORT (NDJSON), https://HOST:PORT (and wss://). TLS
+verifies goniod's certificate against `ca` (else the system's CAs) and its name against
+HOST, as gonioctl --ca does; a client certificate (cert, key) is offered when given.
 """
 from __future__ import annotations
 
@@ -18,41 +19,50 @@ import hashlib
 import http.client
 import json
 import os
+import select
 import socket
+import ssl
 import struct
 import time
 import urllib.parse
 from dataclasses import dataclass
 
-from .errors import ConnectionLost, GonioError, RequestTimeout
+from .errors import ConnectionLost, RequestTimeout, TlsError
 
 MAX_MESSAGE = 64 << 20  # the most a goniod may send (server.max_message_bytes is at most 64 MiB)
 
 
 @dataclass(frozen=True)
 class Address:
-    scheme: str  # "unix", "tcp", "http"
+    scheme: str  # "unix", "tcp", "http", "tls", "https"
     path: str = ""  # unix
     host: str = ""
     port: int = 0
+
+    @property
+    def secure(self) -> bool:
+        return self.scheme in ("tls", "https")
+
+    @property
+    def http(self) -> bool:
+        return self.scheme in ("http", "https")
 
     def __str__(self) -> str:
         return f"unix:{self.path}" if self.scheme == "unix" else f"{self.scheme}://{self.host}:{self.port}"
 
 
 def parse_url(url: str) -> Address:
-    """unix:PATH | unix://PATH | tcp://HOST:PORT | http://HOST:PORT[/rpc]."""
+    """unix:PATH | unix://PATH | tcp://HOST:PORT | http://HOST:PORT[/rpc] | tls://HOST:PORT |
+    https://HOST:PORT[/rpc]."""
     if url.startswith("unix:"):
         path = url[len("unix://"):] if url.startswith("unix://") else url[len("unix:"):]
         if not path:
             raise ValueError(f"url {url!r}: no socket path (unix:///run/gonio/goniod.sock)")
         return Address("unix", path=path)
     u = urllib.parse.urlsplit(url)
-    if u.scheme in ("tls", "https"):
-        raise GonioError(f"url {url!r}: TLS is not served by this goniod version; use tcp://, "
-                         "unix: or http:// (the client takes ca= for it once goniod does)")
-    if u.scheme not in ("tcp", "http") or not u.hostname or u.port is None:
-        raise ValueError(f"url {url!r}: expected unix:PATH, tcp://HOST:PORT or http://HOST:PORT")
+    if u.scheme not in ("tcp", "http", "tls", "https") or not u.hostname or u.port is None:
+        raise ValueError(f"url {url!r}: expected unix:PATH, tcp://HOST:PORT, http://HOST:PORT, "
+                         "tls://HOST:PORT or https://HOST:PORT")
     if u.path not in ("", "/", "/rpc"):
         raise ValueError(f"url {url!r}: goniod answers JSON-RPC at /rpc only")
     return Address(u.scheme, host=u.hostname, port=u.port)
@@ -79,6 +89,24 @@ class StreamLink:
             self._sock.close()
         except OSError:
             pass
+
+    def closed_by_peer(self) -> bool:
+        """Whether goniod has closed this idle link: what is readable is read into the buffer
+        (notifications, a late answer), and end of stream means closed. A request is thus
+        never written into a dead connection and counted as sent."""
+        try:
+            if not select.select([self._sock], [], [], 0)[0]:
+                return False
+            self._sock.setblocking(False)
+            chunk = self._sock.recv(1 << 16)
+        except (BlockingIOError, InterruptedError, ssl.SSLWantReadError):
+            return False
+        except OSError:
+            return True
+        if not chunk:
+            return True
+        self._buf += chunk
+        return False
 
     def send(self, message) -> None:
         data = json.dumps(message, separators=(",", ":")).encode()
@@ -183,31 +211,51 @@ class WebSocketLink(StreamLink):
                     return message
 
 
-def _connect_socket(a: Address, timeout: float) -> socket.socket:
+def tls_context(ca: str | None, cert: str | None, key: str | None) -> ssl.SSLContext:
+    """Verifies the server against `ca` (a PEM bundle; None: the system's CAs) and its name;
+    TLS 1.2 at least; offers the client certificate `cert` (and `key`) when given."""
+    ctx = ssl.create_default_context(cafile=ca)
+    ctx.minimum_version = ssl.TLSVersion.TLSv1_2
+    if cert:
+        ctx.load_cert_chain(cert, key)
+    return ctx
+
+
+def _connect_socket(a: Address, timeout: float, tls: ssl.SSLContext | None = None) -> socket.socket:
     try:
         if a.scheme == "unix":
             s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
             s.settimeout(timeout)
             s.connect(a.path)
-        else:
-            s = socket.create_connection((a.host, a.port), timeout=timeout)
-            s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        return s
+            return s
+        s = socket.create_connection((a.host, a.port), timeout=timeout)
+        s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
     except OSError as e:
         raise ConnectionLost(f"cannot connect to {a}: {e}") from e
+    if not a.secure:
+        return s
+    try:
+        return tls.wrap_socket(s, server_hostname=a.host)
+    except ssl.SSLCertVerificationError as e:
+        s.close()
+        raise TlsError(f"{a}: the server's certificate is not trusted: {e.verify_message} "
+                       "(ca= names the CA that signed it)") from e
+    except (OSError, ssl.SSLError) as e:
+        s.close()
+        raise ConnectionLost(f"{a}: TLS handshake failed: {e}") from e
 
 
-def open_stream(a: Address, timeout: float, token: str | None) -> StreamLink:
-    """A link that carries notifications: NDJSON for unix/tcp, a WebSocket for http."""
-    s = _connect_socket(a, timeout)
-    if a.scheme != "http":
+def open_stream(a: Address, timeout: float, token: str | None, tls: ssl.SSLContext | None = None) -> StreamLink:
+    """A link that carries notifications: NDJSON for unix/tcp/tls, a WebSocket for http(s)."""
+    s = _connect_socket(a, timeout, tls)
+    if not a.http:
         return StreamLink(s, str(a))
     key = base64.b64encode(os.urandom(16)).decode()
     req = (f"GET /ws HTTP/1.1\r\nHost: {a.host}:{a.port}\r\nUpgrade: websocket\r\n"
            f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n")
     if token:
         req += f"Authorization: Bearer {token}\r\n"
-    link = WebSocketLink(s, f"ws://{a.host}:{a.port}/ws")
+    link = WebSocketLink(s, f"{'wss' if a.secure else 'ws'}://{a.host}:{a.port}/ws")
     try:
         s.sendall((req + "\r\n").encode())
         deadline = time.monotonic() + timeout
@@ -245,19 +293,35 @@ def _raise_http_refusal(status_line: str, body: bytes):
 class HttpLink:
     """JSON-RPC over HTTP POST /rpc on one keep-alive connection, bearer token in a header."""
 
-    def __init__(self, a: Address, timeout: float, token: str | None):
-        self.name = f"http://{a.host}:{a.port}/rpc"
-        self._conn = http.client.HTTPConnection(a.host, a.port, timeout=timeout)
+    def __init__(self, a: Address, timeout: float, token: str | None, tls: ssl.SSLContext | None = None):
+        self.name = f"{a.scheme}://{a.host}:{a.port}/rpc"
+        self._conn = (http.client.HTTPSConnection(a.host, a.port, timeout=timeout, context=tls) if a.secure
+                      else http.client.HTTPConnection(a.host, a.port, timeout=timeout))
         self._token = token
         self.notifications: collections.deque = collections.deque()  # HTTP has none
         try:
             self._conn.connect()
             self._conn.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        except ssl.SSLCertVerificationError as e:
+            raise TlsError(f"{self.name}: the server's certificate is not trusted: {e.verify_message} "
+                           "(ca= names the CA that signed it)") from e
         except OSError as e:
             raise ConnectionLost(f"cannot connect to {self.name}: {e}") from e
 
     def close(self) -> None:
         self._conn.close()
+
+    def closed_by_peer(self) -> bool:
+        """An idle keep-alive connection with something to read has been closed (or sent
+        what no request asked for): either way it is not reused."""
+        sock = self._conn.sock
+        try:
+            if sock is None or not select.select([sock], [], [], 0)[0]:
+                return False
+        except OSError:
+            pass
+        self._conn.close()
+        return True
 
     def exchange(self, message, deadline: float):
         body = json.dumps(message, separators=(",", ":")).encode()
