@@ -95,7 +95,8 @@ class Client:
         self._next_id = 1
         self._lock = threading.RLock()
         self.principal: dict | None = None  # whom goniod takes this client for
-        self.reconnects = 0  # links opened again after a drop
+        self.reconnects = 0  # links opened again after a drop or a close
+        self._opened = 0
         for name, cls in _AREAS.items():
             setattr(self, name, cls(self))
         with self._lock:
@@ -150,11 +151,14 @@ class Client:
     def _ensure_link(self):
         if self._link is not None and not self._link.closed_by_peer():
             return self._link
+        reopening = self._link is not None or self._opened > 0
         self._drop()
         try:
             self._link = self._open_link()
         except ConnectionLost as e:  # the call itself was not sent
             raise ConnectionLost(str(e), sent=False) from e
+        self._opened += 1
+        self.reconnects += reopening
         if self.principal is None:
             self.principal = self._exchange(self._link, "auth.whoami", {}, time.monotonic() + self.timeout)
         return self._link
@@ -221,7 +225,6 @@ class Client:
                         raise
                     time.sleep(delay)
                     delay = min(2 * delay, 5.0)
-                    self.reconnects += 1
 
     def subscribe(self, *names: str, topics=OMIT, scan=OMIT):
         """Notifications on a link of their own, as an iterator and an async iterator.
