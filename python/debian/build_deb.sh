@@ -3,11 +3,17 @@
 # Debian's pip builds offline from pyproject.toml, unpacked in Debian's layout
 # (/usr/lib/python3/dist-packages), with the gonio source package's changelog and copyright.
 # The maintainer scripts byte-compile at installation and clean up at removal, as
-# dh_python3's do; no bytecode is shipped.
+# dh_python3's do; no bytecode is shipped. The same source gives the same bytes.
 #   build_deb.sh PYTHON SOURCE_DIR CHANGELOG_GZ COPYRIGHT VERSION MAINTAINER OUTPUT_DIR
 set -euo pipefail
 py=$1 src=$2 changelog=$3 copyright=$4 version=$5 maintainer=$6 out=$7
 here=$(cd "$(dirname "$0")" && pwd)
+# Reproducible: every time stamp is the changelog entry's date (unless SOURCE_DATE_EPOCH is
+# set), so the same source gives the same bytes.
+if [[ -z ${SOURCE_DATE_EPOCH:-} ]]; then
+  SOURCE_DATE_EPOCH=$(date -d "$(gzip -dc "$changelog" | sed -n 's/^ -- .*>  //p' | head -n 1)" +%s)
+fi
+export SOURCE_DATE_EPOCH
 
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -55,6 +61,7 @@ install -m 0755 "$here/postinst" "$here/prerm" "$root/DEBIAN/"
 (cd "$root" && find usr -type f -print0 | sort -z | xargs -0 md5sum) >"$root/DEBIAN/md5sums"
 chmod 0644 "$root/DEBIAN/md5sums"
 
+find "$root" -exec touch -h -d "@$SOURCE_DATE_EPOCH" {} +
 mkdir -p "$out"
 dpkg-deb --root-owner-group -Zxz --build "$root" "$out/python3-gonio_${version}_all.deb" >/dev/null
 echo "$out/python3-gonio_${version}_all.deb"

@@ -3,7 +3,8 @@
 # Debian's layout (the same modules as python/gonio, the same openrpc.json as proto/), root's,
 # with the gonio source's changelog and copyright, Depends on python3, maintainer scripts that
 # byte-compile and clean up; lintian reports no error and no warning; and the unpacked package
-# imports under Debian's python3 with every method of the document.
+# imports under Debian's python3 with every method of the document; a second build is
+# byte-identical.
 #   package_test.sh PYTHON SOURCE_ROOT BUILD_DIR VERSION MAINTAINER
 set -euo pipefail
 py=$1 source=$2 build=$3 version=$4 maintainer=$5
@@ -21,6 +22,10 @@ trap 'rm -rf "$tmp"' EXIT
 deb=$("$source/python/debian/build_deb.sh" "$py" "$source/python" "$build/deploy/debian/changelog.gz" \
         "$source/systemd/debian/copyright" "$version" "$maintainer" "$tmp/out")
 [[ -f $deb && $(basename "$deb") == "python3-gonio_${version}_all.deb" ]] || { fail "no package: $deb"; exit 1; }
+
+again=$("$source/python/debian/build_deb.sh" "$py" "$source/python" "$build/deploy/debian/changelog.gz" \
+          "$source/systemd/debian/copyright" "$version" "$maintainer" "$tmp/again")
+cmp -s "$deb" "$again" || fail "two builds of the same source differ (not reproducible)"
 
 control=$(dpkg-deb -f "$deb")
 field() { sed -n "s/^$1: //p" <<<"$control"; }

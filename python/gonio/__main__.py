@@ -72,7 +72,10 @@ def _status(client: Client, as_json: bool) -> None:
     print(f"goniod {info.get('version', '?')} at {client.url} as {client.principal.get('name')} "
           f"({client.principal.get('role')})")
     print(f"instrument: {inst.get('state', '?')}")
-    print(f"queue: {json.dumps(queue, separators=(', ', ': '))[:200]}")
+    running = queue.get("running")
+    running = running.get("id") if isinstance(running, dict) else running
+    print(f"queue: running {'scan ' + str(running) if running else 'none'}, "
+          f"{len(queue.get('waiting') or [])} waiting")
 
 
 def run(args) -> int:
