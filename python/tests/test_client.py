@@ -183,9 +183,22 @@ def test_the_client_reconnects_across_a_goniod_restart(own_goniod, scheme):
     assert c.reconnects == 1
     # a call while goniod is down waits for it, with back-off
     d.stop()
-    started = threading.Event()
-    threading.Timer(1.0, lambda: (started.set(), d.start())).start()  # set before goniod is up
-    assert {s["name"] for s in c.sample.list()} >= {"before", "after"}
+    started, failed = threading.Event(), []
+
+    def start_later():
+        started.set()  # before goniod is up: the call cannot have been answered earlier
+        try:
+            d.start()
+        except Exception as e:  # noqa: BLE001 — reported by the test below
+            failed.append(e)
+    timer = threading.Timer(1.0, start_later)
+    timer.start()
+    try:
+        names = {s["name"] for s in c.sample.list()}
+    finally:
+        timer.join()
+        assert not failed, f"goniod did not start again: {failed}"
+    assert names >= {"before", "after"}
     assert started.is_set() and c.reconnects == 2
     c.close()
 
