@@ -35,7 +35,9 @@ void to_json(nlohmann::json& j, const Alert& a) {
                      {"count", a.count},
                      {"acknowledged", a.acknowledged},
                      {"acknowledged_by", a.acknowledged_by},
-                     {"acknowledged_at", json_util::or_null(a.acknowledged_at)}};
+                     {"acknowledged_at", json_util::or_null(a.acknowledged_at)},
+                     {"resolved_at", json_util::or_null(a.resolved_at)},
+                     {"resolution", json_util::or_null(a.resolution)}};
 }
 
 void from_json(const nlohmann::json& j, Alert& a) {
@@ -54,6 +56,8 @@ void from_json(const nlohmann::json& j, Alert& a) {
   a.acknowledged = r.optional<bool>("acknowledged", false);
   a.acknowledged_by = r.optional<std::string>("acknowledged_by", "");
   a.acknowledged_at = read_opt<std::string>(r, "acknowledged_at");
+  a.resolved_at = read_opt<std::string>(r, "resolved_at");
+  a.resolution = read_opt<std::string>(r, "resolution");
   r.finish();
 }
 

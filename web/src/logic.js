@@ -123,8 +123,17 @@ export function mergeAlerts(list, incoming) {
   return [...byId.values()].sort((a, b) => b.id - a.id);
 }
 
+// The alerts that still ask for someone: unacknowledged and standing (a resolved alert's
+// scan ended with a verdict that no longer supports it).
 export function unacknowledged(alerts) {
-  return alerts.reduce((n, a) => n + (a.acknowledged ? 0 : 1), 0);
+  return alerts.reduce((n, a) => n + (a.acknowledged || a.resolved_at ? 0 : 1), 0);
+}
+
+// Standing alerts and the ones goniod resolved, apart, each newest first.
+export function splitAlerts(alerts) {
+  const standing = [], resolved = [];
+  for (const a of alerts) (a.resolved_at ? resolved : standing).push(a);
+  return { standing, resolved };
 }
 
 // What a role may do; the server enforces the same (the method table), the UI only hides.

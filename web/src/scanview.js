@@ -190,8 +190,9 @@ export function ScanView({ scanId, samples, status, role, call, bus, thresholds,
       <h2 id="h-scan-alerts">This scan's alerts</h2>
       <ul class="alerts" data-testid="scan-alerts">
         ${alerts.length === 0 && html`<li class="muted">none</li>`}
-        ${alerts.map((a) => html`<li key=${a.id} class=${`alert sev-${a.severity}${a.acknowledged ? ' acked' : ''}`}><span class="badge">${a.severity}</span>
-          <span class="kind">${a.kind}${a.count > 1 ? ` ×${a.count}` : ''}</span> <span class="msg">${a.message}</span></li>`)}
+        ${alerts.map((a) => html`<li key=${a.id} class=${`alert sev-${a.severity}${a.acknowledged ? ' acked' : ''}${a.resolved_at ? ' resolved' : ''}`}><span class="badge">${a.severity}</span>
+          <span class="kind">${a.kind}${a.count > 1 ? ` ×${a.count}` : ''}</span> <span class="msg">${a.message}</span>
+          ${a.resolved_at && html`<span class="resolution" data-testid="alert-resolution">${a.resolution}</span>`}</li>`)}
       </ul>
     </section>
     <section class="panel" aria-labelledby="h-fits">

@@ -238,17 +238,18 @@ std::vector<SqlStatement> build_archive_batch(const std::string& instrument,
     p.insert(p.end(), {instrument, num(a.id), a.kind, std::string(to_text(a.severity)), a.dedup_key,
                        opt(a.scan_id), opt(a.sample_id), opt(a.point_index), a.message, a.first_at,
                        a.last_at, num(a.count), flag(a.acknowledged), a.acknowledged_by,
-                       opt(a.acknowledged_at)});
+                       opt(a.acknowledged_at), opt(a.resolved_at), opt(a.resolution)});
   }
   if (!p.empty())
     emit(out, "INSERT INTO alerts (instrument, alert_id, kind, severity, dedup_key, scan_id, "
               "sample_id, point_index, message, first_at, last_at, count, acknowledged, "
-              "acknowledged_by, acknowledged_at)",
-         15, "ON CONFLICT (instrument, alert_id) DO UPDATE SET severity = excluded.severity, "
+              "acknowledged_by, acknowledged_at, resolved_at, resolution)",
+         17, "ON CONFLICT (instrument, alert_id) DO UPDATE SET severity = excluded.severity, "
              "point_index = excluded.point_index, message = excluded.message, "
              "last_at = excluded.last_at, count = excluded.count, "
              "acknowledged = excluded.acknowledged, acknowledged_by = excluded.acknowledged_by, "
-             "acknowledged_at = excluded.acknowledged_at",
+             "acknowledged_at = excluded.acknowledged_at, resolved_at = excluded.resolved_at, "
+             "resolution = excluded.resolution",
          std::move(p));
   return out;
 }

@@ -142,6 +142,14 @@ CREATE OR REPLACE VIEW sample_points AS
     JOIN scans s ON s.instrument = p.instrument AND s.scan_id = p.scan_id
     JOIN samples sm ON sm.instrument = s.instrument AND sm.sample_id = s.sample_id;
 )sql",
+      // 2 -> 3: an alert's resolution (a sustained divergence alert that its scan's final
+      // verdict no longer supports); open alerts are the unacknowledged ones still standing.
+      R"sql(
+ALTER TABLE alerts ADD COLUMN resolved_at timestamptz;
+ALTER TABLE alerts ADD COLUMN resolution text;
+CREATE OR REPLACE VIEW open_alerts AS
+  SELECT * FROM alerts WHERE NOT acknowledged AND resolved_at IS NULL;
+)sql",
   };
   return m;
 }

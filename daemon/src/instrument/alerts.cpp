@@ -8,6 +8,11 @@
 
 namespace gonio::daemon {
 
+std::optional<std::string> sustained_resolution(std::string_view decision, std::string_view summary) {
+  if (decision == "out_of_tolerance" || decision == "instrument_out_of_spec") return std::nullopt;
+  return fmt::format("resolved: final verdict {}: {}", decision, summary);
+}
+
 AlertService::AlertService(Store& store, Hub& hub, Severity webhook_min)
     : store_(store), hub_(hub), webhook_min_(webhook_min) {}
 
@@ -129,6 +134,17 @@ Alert AlertService::annotate(std::int64_t id, const std::string& note) {
   const Alert a = store_.set_alert_message(id, fmt::format("{}; {}", old->message, note));
   spdlog::info("alert {}: {}", id, note);
   hub_.publish(Topic::alerts, "alert", nlohmann::json(a), a.scan_id);
+  return a;
+}
+
+Alert AlertService::resolve(std::int64_t id, const std::string& resolution) {
+  bool changed = false;
+  const Alert a = store_.resolve_alert(id, resolution, &changed);
+  if (!changed) return a;
+  spdlog::info("alert {} resolved: {}", id, resolution);
+  hub_.publish(Topic::alerts, "alert", nlohmann::json(a), a.scan_id);
+  if (a.severity >= webhook_min_)
+    if (auto s = sink()) s->deliver(nlohmann::json{{"event", "alert.resolved"}, {"alert", a}});
   return a;
 }
 

@@ -47,7 +47,29 @@ Scan Instrument::transition(std::int64_t id, ScanState to, const std::string& re
   const auto sc = stored_scan(id);
   hub_.publish(Topic::state, "scan.state",
                json{{"scan", id}, {"state", to_text(sc.state)}, {"reason", sc.reason}}, id);
+  if (is_final(sc.state)) resolve_unsupported_alerts(id);
   return sc;
+}
+
+// Only at the end: mid-scan the verdict firms up and may swing, and an alert resolved and
+// raised again would page people twice for one scan (docs/decision-rule.md).
+void Instrument::resolve_unsupported_alerts(std::int64_t scan) {
+  try {
+    const auto fit = store_.latest_fit(scan, "verdict");
+    if (!fit || !fit->result.is_object()) return;
+    const auto decision = fit->result.value("decision", std::string());
+    if (decision.empty()) return;
+    const auto text = sustained_resolution(decision, fit->result.value("summary", std::string()));
+    if (!text) return;
+    AlertFilter standing;
+    standing.scan_id = scan;
+    standing.resolved = false;
+    standing.limit = 1000;
+    for (const auto& a : store_.alerts(standing))
+      if (a.kind == alert_kind::sustained) alerts_.resolve(a.id, *text);
+  } catch (const Error& e) {
+    spdlog::warn("scan {}: cannot resolve its sustained alert: {}", scan, e.what());
+  }
 }
 
 // A pause or cancel of the scan that is running is the runner's to carry out between points:

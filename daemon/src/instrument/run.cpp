@@ -179,6 +179,15 @@ void Instrument::finish_run(ScanState state, const std::string& reason, const st
     std::lock_guard lock(mu_);
     adaptive_status_ = json(nullptr);
   }
+  // A scan that ends early is judged on every point it has: that verdict resolves or keeps
+  // its sustained alert (transition()).
+  if ((state == ScanState::cancelled || state == ScanState::failed) && r->evidence.points() > 0) {
+    try {
+      store_.insert_fit(r->scan.id, "verdict", r->spec, r->evidence.verdict().to_json(), "goniod");
+    } catch (const std::exception& e) {
+      spdlog::warn("scan {}: cannot store the verdict: {}", r->scan.id, e.what());
+    }
+  }
   std::optional<Scan> sc;
   try {
     sc = transition(r->scan.id, state, reason, actor);

@@ -1,4 +1,6 @@
-// The alert.* methods: listing and acknowledging alerts.
+// The alert.* methods: listing (standing, resolved or all) and acknowledging alerts.
+#include <fmt/format.h>
+
 #include "methods/params.hpp"
 #include "methods/registrar.hpp"
 
@@ -16,6 +18,14 @@ void register_alert(MethodRegistrar& reg, Services& s) {
     if (const auto* sc = r.raw("scan"); sc && !sc->is_null()) {
       f.scan_id = json_util::get_as<std::int64_t>(*sc, "scan");
       if (*f.scan_id <= 0) throw Error::invalid("scan", "is not an id (ids are >= 1)");
+    }
+    // standing | resolved | all (the default: every alert, as before resolution existed).
+    if (const auto* st = r.raw("state"); st && !st->is_null()) {
+      const auto state = json_util::get_as<std::string>(*st, "state");
+      if (state == "standing") f.resolved = false;
+      else if (state == "resolved") f.resolved = true;
+      else if (state != "all")
+        throw Error::invalid("state", fmt::format("'{}' is not one of: standing, resolved, all", state));
     }
     if (const auto* sv = r.raw("severity"); sv && !sv->is_null())
       f.min_severity = parse_enum<Severity>(json_util::get_as<std::string>(*sv, "severity"), "severity");

@@ -14,7 +14,7 @@ namespace {
 
 constexpr const char* kAlertColumns =
     "id, kind, severity, dedup_key, scan_id, sample_id, point_index, message, first_at, "
-    "last_at, count, acknowledged, acknowledged_by, acknowledged_at";
+    "last_at, count, acknowledged, acknowledged_by, acknowledged_at, resolved_at, resolution";
 
 Alert read_alert(const db::Stmt& s) {
   Alert a;
@@ -32,6 +32,8 @@ Alert read_alert(const db::Stmt& s) {
   a.acknowledged = s.i64(11) != 0;
   a.acknowledged_by = s.text(12);
   a.acknowledged_at = s.opt_text(13);
+  a.resolved_at = s.opt_text(14);
+  a.resolution = s.opt_text(15);
   return a;
 }
 
@@ -48,7 +50,7 @@ Alert Store::raise_alert(const AlertDraft& d, bool* created) {
   const auto now = utc::now();
   const auto open = db::query_one(*writer_,
                                   "SELECT id FROM alerts WHERE dedup_key = ? AND acknowledged = 0 "
-                                  "ORDER BY id DESC LIMIT 1",
+                                  "AND resolved_at IS NULL ORDER BY id DESC LIMIT 1",
                                   [](const db::Stmt& s) { return s.i64(0); }, d.dedup_key);
   std::int64_t id = 0;
   if (open) {
@@ -83,12 +85,13 @@ std::vector<Alert> Store::alerts(const AlertFilter& f) const {
   auto c = read();
   return db::query(*c,
                    fmt::format("SELECT {} FROM alerts WHERE (?1 IS NULL OR acknowledged = ?1) AND "
-                               "(?2 IS NULL OR scan_id = ?2) AND severity >= ?3 "
+                               "(?2 IS NULL OR scan_id = ?2) AND severity >= ?3 AND "
+                               "(?6 IS NULL OR (resolved_at IS NOT NULL) = ?6) "
                                "ORDER BY id DESC LIMIT ?4 OFFSET ?5",
                                kAlertColumns),
                    read_alert, f.acknowledged, f.scan_id,
                    static_cast<std::int64_t>(f.min_severity.value_or(Severity::info)), f.limit,
-                   f.offset);
+                   f.offset, f.resolved);
 }
 
 Alert Store::ack_alert(std::int64_t id, const std::string& actor) {
@@ -125,6 +128,25 @@ Alert Store::set_alert_message(std::int64_t id, const std::string& message) {
     t.commit();
     outbox_written();
   }
+  return *alert(id);
+}
+
+Alert Store::resolve_alert(std::int64_t id, const std::string& resolution, bool* changed) {
+  bool resolved_now = false;
+  {
+    std::lock_guard lock(write_mu_);
+    db::Transaction t(*writer_);
+    db::execute(*writer_,
+                "UPDATE alerts SET resolved_at = ?, resolution = ? WHERE id = ? AND resolved_at IS NULL",
+                utc::now(), resolution, id);
+    resolved_now = writer_->changes() != 0;
+    if (!resolved_now && !alert_by_id(*writer_, id))
+      throw Error::not_found("alert", fmt::format("alert {}", id));
+    if (resolved_now) outbox_in(OutboxRow::Kind::alert, id, 0);
+    t.commit();
+    if (resolved_now) outbox_written();
+  }
+  if (changed) *changed = resolved_now;
   return *alert(id);
 }
 

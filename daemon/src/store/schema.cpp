@@ -113,6 +113,12 @@ CREATE TABLE outbox (
   at TEXT NOT NULL,
   detail TEXT);
 )sql",
+    // 4 -> 5: an alert's resolution (a sustained divergence alert that its scan's final
+    // verdict no longer supports). Null while the alert stands.
+    R"sql(
+ALTER TABLE alerts ADD COLUMN resolved_at TEXT;
+ALTER TABLE alerts ADD COLUMN resolution TEXT;
+)sql",
 };
 static_assert(std::size(kMigrations) == Store::kSchemaVersion);
 

@@ -242,6 +242,37 @@ TEST(ArchiveBatch, RowsWhoseRecordIsGoneAreLeftOut) {
   ASSERT_EQ(st.size(), 1u);  // only the instrument: no scan to hang points on
 }
 
+TEST(ArchiveBatch, AnAlertCarriesItsResolution) {
+  auto in = input_with(0);
+  Alert a;
+  a.id = 5;
+  a.kind = "sustained_divergence";
+  a.severity = Severity::critical;
+  a.dedup_key = "sustained:scan:3";
+  a.scan_id = 3;
+  a.message = "scan 3: out_of_tolerance";
+  a.first_at = a.last_at = "2026-01-01T00:00:02Z";
+  a.resolved_at = "2026-01-01T00:00:09Z";
+  a.resolution = "resolved: final verdict agrees: fine";
+  in.alerts.emplace(5, a);
+  in.rows.push_back({100, Kind::alert, 5, 0, "2026-01-01T00:00:09Z", nullptr, ""});
+  const auto st = build_archive_batch("gcms-a", "1.2.3", in);
+  const auto& ins = st.back();
+  ASSERT_TRUE(ins.sql.starts_with("INSERT INTO alerts")) << ins.sql;
+  ASSERT_EQ(ins.params.size(), 17u);
+  EXPECT_EQ(ins.params[15], std::optional<std::string>("2026-01-01T00:00:09Z"));
+  EXPECT_EQ(ins.params[16], std::optional<std::string>("resolved: final verdict agrees: fine"));
+  // Upserted: a resolution reaches an alert the archive already holds.
+  EXPECT_NE(ins.sql.find("resolved_at = excluded.resolved_at"), std::string::npos);
+  EXPECT_NE(ins.sql.find("resolution = excluded.resolution"), std::string::npos);
+  // A standing alert's resolution is NULL.
+  in.alerts[5].resolved_at.reset();
+  in.alerts[5].resolution.reset();
+  const auto standing = build_archive_batch("gcms-a", "1.2.3", in);
+  EXPECT_FALSE(standing.back().params[15].has_value());
+  EXPECT_FALSE(standing.back().params[16].has_value());
+}
+
 TEST(ArchiveBatch, ArrayLiterals) {
   EXPECT_EQ(pg_float_array({}), "{}");
   EXPECT_EQ(pg_float_array({1.5, 2, 0.1, -3e-7}), "{1.5,2,0.1,-3e-07}");
@@ -256,6 +287,9 @@ TEST(ArchiveSchema, VersionedMigrationsCreateTheDocumentedTablesAndViews) {
   for (const char* v : {"sample_points", "point_spectra", "scan_summary", "open_alerts"})
     EXPECT_NE(first.find(fmt::format("CREATE VIEW {} AS", v)), std::string::npos) << v;
   EXPECT_NE(first.find("PRIMARY KEY (instrument, scan_id, idx)"), std::string::npos);
+  const auto& third = archive_migrations().at(2);
+  EXPECT_NE(third.find("ADD COLUMN resolved_at"), std::string::npos);
+  EXPECT_NE(third.find("ADD COLUMN resolution"), std::string::npos);
 }
 
 // ---- MQTT

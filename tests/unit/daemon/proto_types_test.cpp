@@ -136,6 +136,18 @@ TEST(Alert, RoundTripsAndParsesSeverity) {
   a.first_at = a.last_at = "2024-01-01T00:00:00.000Z";
   a.count = 3;
   EXPECT_EQ(json(a).get<Alert>(), a);
+  // Standing: both resolution fields null; resolved: both set, and they round-trip.
+  EXPECT_TRUE(json(a)["resolved_at"].is_null());
+  EXPECT_TRUE(json(a)["resolution"].is_null());
+  a.resolved_at = "2024-01-01T00:05:00.000Z";
+  a.resolution = "resolved: final verdict agrees: within tolerance";
+  EXPECT_EQ(json(a)["resolved_at"], "2024-01-01T00:05:00.000Z");
+  EXPECT_EQ(json(a).get<Alert>(), a);
+  // An alert from a peer that predates resolution still reads, as standing.
+  auto old = json(a);
+  old.erase("resolved_at");
+  old.erase("resolution");
+  EXPECT_FALSE(old.get<Alert>().resolved_at.has_value());
   EXPECT_EQ(parse_enum<Severity>("warning", "severity"), Severity::warning);
   EXPECT_EQ(field_of([] { (void)parse_enum<Severity>("loud", "severity"); }), "severity");
 }

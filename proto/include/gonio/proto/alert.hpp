@@ -3,6 +3,10 @@
 // An alert has a kind, a severity and a deduplication key: while an alert with the same
 // key is unacknowledged, a repeat only bumps its count and last_at (one alert per cause,
 // not one per point). A technician acknowledges it; the next occurrence opens a new one.
+// An alert stands until goniod resolves it: a sustained divergence alert whose scan ended
+// with a verdict that no longer supports it gets resolved_at and a resolution (the final
+// verdict's summary). Acknowledged and resolved are independent: one is people, the other
+// the evidence.
 #pragma once
 
 #include <cstdint>
@@ -49,6 +53,8 @@ struct Alert {
   bool acknowledged = false;
   std::string acknowledged_by;
   std::optional<std::string> acknowledged_at;
+  std::optional<std::string> resolved_at;  // UTC ISO-8601; null while the alert stands
+  std::optional<std::string> resolution;   // why it no longer stands
 
   friend bool operator==(const Alert&, const Alert&) = default;
 };

@@ -32,7 +32,7 @@ class AlertService;
 
 // ---- schema (archive_schema.cpp)
 
-inline constexpr int kArchiveSchemaVersion = 2;
+inline constexpr int kArchiveSchemaVersion = 3;
 // Migration k brings the archive from version k to k + 1 (one SQL text each).
 const std::vector<std::string>& archive_migrations();
 

@@ -2,10 +2,15 @@
 //
 // The store deduplicates (one open alert per dedup_key); every raise is pushed to the
 // `alerts` topic; a new alert (or one whose severity rose) at or above the webhook's
-// minimum severity is handed to the webhook sender, which POSTs it with retries.
+// minimum severity is handed to the webhook sender, which POSTs it with retries. A
+// resolution goes the same ways: the alert, now with resolved_at, to the topic (and so to
+// MQTT), an `alert.resolved` event to the webhook, a row to the archive's outbox.
 #pragma once
 
 #include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
 
 #include <nlohmann/json.hpp>
 
@@ -21,6 +26,12 @@ class AlertSink {
   virtual void deliver(const nlohmann::json& payload) = 0;
   virtual nlohmann::json stats() const = 0;  // {"delivered", "failed", "pending"}
 };
+
+// The resolution of a standing sustained divergence alert by its scan's final verdict
+// (docs/decision-rule.md): "resolved: final verdict <decision>: <summary>" when the decision
+// no longer supports an alert (agrees, undecided), none when it still does
+// (out_of_tolerance, instrument_out_of_spec).
+std::optional<std::string> sustained_resolution(std::string_view decision, std::string_view summary);
 
 class AlertService {
  public:
@@ -39,6 +50,9 @@ class AlertService {
   Alert ack(std::int64_t id, const std::string& actor);
   // Appends `note` to alert `id`'s message and pushes the alert to subscribers again.
   Alert annotate(std::int64_t id, const std::string& note);
+  // Resolves alert `id` (Store::resolve_alert) and, if it stood until now, publishes it and
+  // hands the webhook an `alert.resolved` event.
+  Alert resolve(std::int64_t id, const std::string& resolution);
 
  private:
   Store& store_;

@@ -172,6 +172,10 @@ class Instrument {
   Scan stored_scan(std::int64_t id) const;
   Scan transition(std::int64_t id, ScanState to, const std::string& reason,
                   const std::string& actor);
+  // A scan that has ended (completed, failed, cancelled): its standing sustained divergence
+  // alerts that its last stored verdict no longer supports are resolved (alerts.hpp,
+  // sustained_resolution). Called by transition().
+  void resolve_unsupported_alerts(std::int64_t scan);
   DeviceFacts device_facts() const;  // for check_plan
   void on_device_fault(const Error& e);
   // The store cannot write (Error(storage_unavailable)): the scan pauses with a critical

@@ -8,7 +8,7 @@
 //   topic      notification method    params
 //   progress   scan.progress          {scan, state, points_done, points_total, diverged, eta_s}
 //   points     scan.point             a PointRecord
-//   alerts     alert                  an Alert (new or bumped)
+//   alerts     alert                  an Alert (new, bumped, acknowledged or resolved)
 //   state      instrument.state       instrument.status result
 //              scan.state             {scan, state, reason}
 #pragma once

@@ -120,6 +120,7 @@ struct ScanFilter {
 
 struct AlertFilter {
   std::optional<bool> acknowledged;
+  std::optional<bool> resolved;  // false: standing ones only; true: resolved ones only
   std::optional<std::int64_t> scan_id;
   std::optional<Severity> min_severity;
   std::size_t offset = 0, limit = 100;
@@ -127,7 +128,7 @@ struct AlertFilter {
 
 class Store {
  public:
-  static constexpr int kSchemaVersion = 4;
+  static constexpr int kSchemaVersion = 5;
 
   // Opens (creating) the database; runs migrations. Throws Error(io_error) when the file
   // cannot be opened, Error(unsupported) when it is newer than this build.
@@ -187,7 +188,7 @@ class Store {
   std::int64_t next_point_index(std::int64_t scan_id) const;
 
   // ---- alerts
-  // Inserts a new alert or, while one with the same dedup_key is unacknowledged, bumps its
+  // Inserts a new alert or, while one with the same dedup_key is unacknowledged and standing, bumps its
   // count, last_at, severity (never lowered), point and message. `created` tells which.
   Alert raise_alert(const AlertDraft& draft, bool* created = nullptr);
   std::optional<Alert> alert(std::int64_t id) const;
@@ -196,6 +197,10 @@ class Store {
   Alert ack_alert(std::int64_t id, const std::string& actor);
   // Replaces an alert's message (a diagnosis appended later); count and times unchanged.
   Alert set_alert_message(std::int64_t id, const std::string& message);
+  // Marks alert `id` resolved now with `resolution`; `changed` says whether it stood until
+  // now (resolving twice keeps the first). A resolved alert no longer takes repeats of its
+  // dedup_key: the next raise opens a new one. Throws Error(not_found).
+  Alert resolve_alert(std::int64_t id, const std::string& resolution, bool* changed = nullptr);
 
   // ---- fits and profiles
   StoredFit insert_fit(std::int64_t scan_id, const std::string& kind, const std::string& model,
