@@ -9,7 +9,9 @@
 //    alert.list's standing/resolved filter and gonioctl's table of resolved alerts. The plan
 //    measures a coarse grid first and a fine one after, so the odd points are spread thinly
 //    over the whole range: no stretch of the scan is mostly made of them;
-//  - still 5 % above: the final verdict alerts, and the alert stands.
+//  - still 5 % above: the final verdict alerts, and the alert stands;
+//  - as catalogued, and the scan cancelled once its verdict stops alerting: the verdict on
+//    the points it has is final, and resolves the alert.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -23,9 +25,10 @@ constexpr const char* kCatalogue = "lambert:albedo=400:0.06,500:0.12,600:0.45,70
 constexpr const char* kOff = "lambert:albedo=400:0.06,500:0.12,600:0.4725,700:0.55";
 const json kGrids = {"in=45;out=-30:30:4", "in=45;out=-29.5:29.5:0.5"};  // 16 + 119 points
 
-std::string config(const std::string& hidden_sample) {
+std::string config(const std::string& hidden_sample, double time_scale = 0) {
   MockOptions o;
   o.true_sample = hidden_sample;
+  o.time_scale = time_scale;
   o.lab = "full_scale_counts = 1e12\nposition_repeatability_deg = 0.05\n";
   o.extra = "[divergence]\npause_on_sustained = true\n";
   return mock_config(o);
@@ -133,6 +136,26 @@ TEST(Resolution, AnAlertTheFinalVerdictSupportsStands) {
   EXPECT_TRUE(standing[0]["resolved_at"].is_null());
   EXPECT_TRUE(standing[0]["resolution"].is_null());
   EXPECT_TRUE(sustained_of(c, id, "resolved").empty());
+}
+
+TEST(Resolution, ACancelledScanIsJudgedOnThePointsItHas) {
+  TempDir dir;
+  const auto id = raise_mid_scan(dir);
+  Goniod g(dir.path, config(kCatalogue, 0.5));  // moves and readings take wall time
+  auto c = g.unix_conn();
+  c.call("scan.resume", json{{"scan", id}});
+  json sc;
+  ASSERT_TRUE(eventually([&] {
+    sc = c.call("scan.get", json{{"scan", id}});
+    return sc["state"] == "running" && sc["points_done"].get<int>() > 16 && !alerting(sc["verdict"]);
+  }, 60s)) << sc.dump();
+  ASSERT_EQ(c.call("scan.cancel", json{{"scan", id}})["state"], "cancelled");
+  const auto v = c.call("scan.get", json{{"scan", id}})["verdict"];
+  ASSERT_FALSE(alerting(v)) << v.dump();
+  const auto resolved = sustained_of(c, id, "resolved");
+  ASSERT_EQ(resolved.size(), 1u) << c.call("alert.list", json{{"scan", id}}).dump();
+  EXPECT_EQ(resolved[0]["resolution"], "resolved: final verdict " + v["decision"].get<std::string>() +
+                                           ": " + v["summary"].get<std::string>());
 }
 
 }  // namespace
