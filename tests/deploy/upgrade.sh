@@ -121,7 +121,11 @@ stop
 db=$R/var/lib/gonio/goniod.db
 sqlite3 "$db" <"$old/store-schema.sql" || fail "0.1.0's schema does not load"
 copy="ATTACH '$state/goniod.db' AS cur;"
-for t in samples scans points alerts audit tokens; do copy+="INSERT INTO main.$t SELECT * FROM cur.$t;"; done
+# Column by column as 0.1.0 named them: later versions add columns, never drop or rename one.
+for t in samples scans points alerts audit tokens; do
+  cols=$(sqlite3 "$db" "SELECT group_concat(name, ', ') FROM pragma_table_info('$t')")
+  copy+="INSERT INTO main.$t ($cols) SELECT $cols FROM cur.$t;"
+done
 sqlite3 "$db" "$copy" || fail "the store does not copy into 0.1.0's schema (a released table changed?)"
 query() { sqlite3 "$db" "$1"; }
 [[ $(query 'PRAGMA user_version') == 2 ]] || fail "the old store is not at schema version 2"
