@@ -33,13 +33,16 @@ void SampleSpec::validate(std::string_view field) const {
                                                 kMaxBsdfLength));
   if (!(tolerance >= 0 && tolerance <= kMaxTolerance))
     throw Error::out_of_range(f("tolerance"), tolerance, 0, kMaxTolerance);
+  if (!(model_u >= 0 && model_u <= kMaxModelU))
+    throw Error::out_of_range(f("model_u"), model_u, 0, kMaxModelU);
 }
 
 void to_json(nlohmann::json& j, const SampleSpec& s) {
   j = nlohmann::json{{"name", s.name},
                      {"notes", s.notes},
                      {"bsdf", s.bsdf ? nlohmann::json(*s.bsdf) : nlohmann::json(nullptr)},
-                     {"tolerance", s.tolerance}};
+                     {"tolerance", s.tolerance},
+                     {"model_u", s.model_u}};
 }
 
 void from_json(const nlohmann::json& j, SampleSpec& s) {
@@ -52,6 +55,7 @@ void from_json(const nlohmann::json& j, SampleSpec& s) {
   else
     s.bsdf.reset();
   s.tolerance = r.optional<double>("tolerance", 0.02);
+  s.model_u = r.optional<double>("model_u", 0.0);
   r.finish();
   s.validate("");
 }
@@ -61,6 +65,14 @@ void to_json(nlohmann::json& j, const Sample& s) {
   j["id"] = s.id;
   j["created_at"] = s.created_at;
   j["predicted"] = s.spec.bsdf.has_value();
+  nlohmann::json cat = nlohmann::json(nullptr);
+  if (!s.catalogue.empty()) {
+    cat = nlohmann::json::parse(s.catalogue, nullptr, false);
+    if (cat.is_object()) cat.erase("points");
+    else cat = nlohmann::json(nullptr);
+  }
+  j["route"] = cat.is_object() ? cat.value("route", "formula") : "formula";
+  j["catalogue"] = std::move(cat);
 }
 
 }  // namespace gonio

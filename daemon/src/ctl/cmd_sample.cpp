@@ -1,4 +1,4 @@
-// gonioctl sample: the sample catalog (create, get, list).
+// gonioctl sample: the sample catalog (create, get, list, export).
 #include <iostream>
 #include <memory>
 #include <string>
@@ -15,8 +15,9 @@ using nlohmann::json;
 namespace {
 
 struct SampleArgs {
-  std::string name, notes, bsdf, ref;
-  double tolerance = 0.02;
+  std::string name, notes, bsdf, ref, model, file, format = "json";
+  double tolerance = 0.02, model_u = 0;
+  std::int64_t reference_scan = 0;
 };
 
 }  // namespace
@@ -35,10 +36,24 @@ void add_sample_commands(CLI::App& app, Context& ctx) {
   screate->add_option("--bsdf", args->bsdf, "reference BSDF spec for the twin (none: no predictions)");
   screate->add_option("--tolerance", args->tolerance, "relative tolerance of the divergence test");
   screate->add_option("--notes", args->notes);
+  screate->add_option("--model-u", args->model_u, "the BSDF spec's stated relative u (0..0.5)");
+  auto* rscan = screate->add_option("--reference-scan", args->reference_scan,
+                                    "make the catalogue from this completed scan (a master)");
+  screate->add_option("--model", args->model, "fit this spec ('?' marks) to the master scan")->needs(rscan);
+  screate->add_option("--reference-file", args->file,
+                      "a master exported by `sample export` (.json) or a BSDF table, in the data directory")
+      ->excludes(rscan);
   screate->callback([&ctx, args] {
     ctx.action = [args](Session& s) {
       json p{{"name", args->name}, {"notes", args->notes}, {"tolerance", args->tolerance}};
-      p["bsdf"] = args->bsdf.empty() ? json(nullptr) : json(args->bsdf);
+      if (args->reference_scan || !args->file.empty()) {
+        json ref = args->file.empty() ? json{{"scan", args->reference_scan}} : json{{"file", args->file}};
+        if (!args->model.empty()) ref["model"] = args->model;
+        p["reference"] = std::move(ref);
+      } else {
+        p["bsdf"] = args->bsdf.empty() ? json(nullptr) : json(args->bsdf);
+      }
+      if (args->model_u != 0) p["model_u"] = args->model_u;
       const auto r = s.call("sample.create", p);
       print(s.options(), r, [&] { print_fields(r); });
       return 0;
@@ -53,13 +68,26 @@ void add_sample_commands(CLI::App& app, Context& ctx) {
       return 0;
     };
   });
+  auto* sexport = sample->add_subcommand("export", "a sample's master, for another instrument (to stdout)");
+  sexport->add_option("sample", args->ref)->required();
+  sexport->add_option("--format", args->format, "json (the master, read back by --reference-file) or bsdf (IS-SA)")
+      ->check(CLI::IsMember({"json", "bsdf"}));
+  sexport->callback([&ctx, args] {
+    ctx.action = [args](Session& s) {
+      const auto r = s.call("sample.export", json{{"sample", sample_ref(args->ref)}, {"format", args->format}});
+      if (s.options().json) std::cout << r.dump() << '\n';
+      else std::cout << r.at("content").get<std::string>();
+      return 0;
+    };
+  });
   sample->add_subcommand("list", "every sample")->callback([&ctx] {
     ctx.action = [](Session& s) {
       const auto r = s.call("sample.list", json{{"limit", 1000}});
       print(s.options(), r, [&] {
-        Table t({"id", "name", "tolerance", "bsdf", "notes"});
+        Table t({"id", "name", "tolerance", "route", "bsdf", "notes"});
         for (const auto& x : r)
-          t.add({cell(x["id"]), cell(x["name"]), cell(x["tolerance"]), cell(x["bsdf"]), cell(x["notes"])});
+          t.add({cell(x["id"]), cell(x["name"]), cell(x["tolerance"]), cell(x.value("route", json("formula"))),
+                 cell(x["bsdf"]), cell(x["notes"])});
         std::cout << t.render();
       });
       return 0;

@@ -10,6 +10,7 @@
 #include <spdlog/spdlog.h>
 
 #include "gonio/daemon/instrument/autorange.hpp"
+#include "gonio/daemon/instrument/catalogue.hpp"
 #include "gonio/daemon/instrument/instrument.hpp"
 #include "gonio/daemon/instrument/point_reduction.hpp"
 #include "gonio/proto/error.hpp"
@@ -95,9 +96,13 @@ void Instrument::start_run(const Scan& scan) {
     try {
       r->spec = *sample->spec.bsdf;
       const auto& grid = scan.plan.wavelengths;
+      ScanTwin::CatalogueU catalogue_u;
+      if (auto cat = std::make_shared<const Catalogue>(Catalogue::of(*sample)); cat->has_u())
+        catalogue_u = [cat, grid](const Geometry& g) { return cat->relative_u(g, grid); };
       auto tw = std::make_shared<const ScanTwin>(
           twin_.make(r->spec, grid, "sample.bsdf", snap.profile), r->spec,
-          [&](const std::string& spec) { return twin_.make(spec, grid, "sample.bsdf", snap.profile); });
+          [&](const std::string& spec) { return twin_.make(spec, grid, "sample.bsdf", snap.profile); },
+          std::move(catalogue_u));
       if (scan.plan.adaptive) r->scan_twin = std::move(tw);  // a batch per chosen point
       else if (r->next < scan.points_total)
         r->batch = twin_.batch(std::move(tw), scan.plan.geometries, scan.plan.geometry_index(r->next));

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "gonio/daemon/instrument/catalogue.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::daemon {
@@ -82,8 +83,9 @@ std::vector<SpecParameter> spec_parameters(const std::string& spec, std::size_t 
 }
 
 ScanTwin::ScanTwin(std::shared_ptr<const twin::Twin> nominal, const std::string& spec,
-                   const std::function<std::shared_ptr<const twin::Twin>(const std::string&)>& make)
-    : nominal_(std::move(nominal)), budget_(*nominal_) {
+                   const std::function<std::shared_ptr<const twin::Twin>(const std::string&)>& make,
+                   CatalogueU catalogue_u)
+    : nominal_(std::move(nominal)), budget_(*nominal_), catalogue_u_(std::move(catalogue_u)) {
   for (auto& p : spec_parameters(spec)) {
     const double h = p.value != 0 ? kStep * std::abs(p.value) : 0.01;
     for (double step : {h, -h}) {
@@ -101,6 +103,7 @@ ScanTwin::PointPrediction ScanTwin::predict(const Geometry& g, const twin::Estim
   PointPrediction out;
   out.prediction = nominal_->predict(g, options);
   out.budget = budget_.evaluate(out.prediction, options);
+  if (catalogue_u_) add_catalogue_entry(out.budget, out.prediction.beta, catalogue_u_(g));
   const auto variant = twin::BudgetModel::variant_options(options, out.prediction.samples);
   const auto& base = out.budget.beta_base;
   for (const auto& c : candidates_) {

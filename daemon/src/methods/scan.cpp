@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 
 #include "gonio/daemon/instrument/adaptive_loop.hpp"
+#include "gonio/daemon/instrument/catalogue.hpp"
 #include "gonio/daemon/store/export.hpp"
 #include "methods/inverse.hpp"
 #include "methods/params.hpp"
@@ -60,6 +61,16 @@ rpc::Result scan_submit(Services& s, rpc::Call& c) {
   plan.sample_name.clear();
   s.instrument.validate_plan(plan);
   AdaptiveLoop::check(plan);
+  // A master predicts only where it was measured: refused here, not point by point later.
+  if (!sample.catalogue.empty()) {
+    const auto cat = Catalogue::of(sample);
+    for (std::size_t i = 0; i < plan.geometries.size(); ++i)
+      if (const auto why = cat.uncovered(plan.geometries[i]); !why.empty())
+        throw Error(Errc::plan_rejected,
+                    fmt::format("geometries[{}] = {}: sample '{}': {}", i, plan.geometries[i].to_string(),
+                                sample.spec.name, why),
+                    fmt::format("geometries[{}]", i));
+  }
   bool predicted = sample.spec.bsdf.has_value();
   if (predicted) (void)s.twin.make(*sample.spec.bsdf, plan.wavelengths, "sample.bsdf");
   const auto scan = s.store.insert_scan(plan, predicted, actor(c));

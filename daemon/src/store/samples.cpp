@@ -10,7 +10,7 @@ using nlohmann::json;
 
 namespace {
 
-constexpr const char* kSampleColumns = "id, name, notes, bsdf, tolerance, created_at";
+constexpr const char* kSampleColumns = "id, name, notes, bsdf, tolerance, created_at, model_u, catalogue";
 
 Sample read_sample(const db::Stmt& s) {
   Sample x;
@@ -20,12 +20,15 @@ Sample read_sample(const db::Stmt& s) {
   x.spec.bsdf = s.opt_text(3);
   x.spec.tolerance = s.f64(4);
   x.created_at = s.text(5);
+  x.spec.model_u = s.f64(6);
+  x.catalogue = s.opt_text(7).value_or("");
   return x;
 }
 
 }  // namespace
 
-Sample Store::create_sample(const SampleSpec& spec, const std::string& actor) {
+Sample Store::create_sample(const SampleSpec& spec, const std::string& actor,
+                             const std::string& catalogue) {
   spec.validate("");
   std::lock_guard lock(write_mu_);
   db::Transaction t(*writer_);
@@ -35,9 +38,12 @@ Sample Store::create_sample(const SampleSpec& spec, const std::string& actor) {
   Sample out;
   out.spec = spec;
   out.created_at = utc::now();
+  out.catalogue = catalogue;
   db::execute(*writer_,
-              "INSERT INTO samples(name, notes, bsdf, tolerance, created_at) VALUES (?,?,?,?,?)",
-              spec.name, spec.notes, spec.bsdf, spec.tolerance, out.created_at);
+              "INSERT INTO samples(name, notes, bsdf, tolerance, created_at, model_u, catalogue) "
+              "VALUES (?,?,?,?,?,?,?)",
+              spec.name, spec.notes, spec.bsdf, spec.tolerance, out.created_at, spec.model_u,
+              catalogue.empty() ? std::optional<std::string>() : std::optional<std::string>(catalogue));
   out.id = writer_->last_insert_id();
   db::audit_in(*writer_, actor, "sample.create", fmt::format("sample:{}", out.id), json(spec));
   outbox_in(OutboxRow::Kind::sample, out.id, 0);

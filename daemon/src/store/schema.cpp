@@ -119,6 +119,12 @@ CREATE TABLE outbox (
 ALTER TABLE alerts ADD COLUMN resolved_at TEXT;
 ALTER TABLE alerts ADD COLUMN resolution TEXT;
 )sql",
+    // 5 -> 6: a sample's catalogue uncertainty: the formula's stated u, or the master
+    // reference (or the model fitted to one) it was made from (docs/decision-rule.md).
+    R"sql(
+ALTER TABLE samples ADD COLUMN model_u REAL NOT NULL DEFAULT 0;
+ALTER TABLE samples ADD COLUMN catalogue TEXT;
+)sql",
 };
 static_assert(std::size(kMigrations) == Store::kSchemaVersion);
 

@@ -7,6 +7,9 @@
 // ("conductor.alpha"), a spectrum given as nm:value nodes is one parameter per node
 // ("lambert.albedo@600", the band around that node). Each is varied by 5 % of its value
 // (inward when that would leave the model's range), with the budget's common random numbers.
+//
+// A catalogue with its own uncertainty (a master reference, a fitted model, a stated
+// model_u) adds the budget's "catalogue" entry at every point (catalogue.hpp).
 #pragma once
 
 #include <functional>
@@ -46,10 +49,14 @@ class ScanTwin {
     std::vector<SampleSensitivity> sample;
   };
 
+  // The catalogue's relative u per channel at a geometry (empty: none).
+  using CatalogueU = std::function<std::vector<double>(const Geometry&)>;
+
   // `make` builds a twin of a spec with the nominal's profile and grid; a parameter whose
   // variant it refuses on both sides is left out.
   ScanTwin(std::shared_ptr<const twin::Twin> nominal, const std::string& spec,
-           const std::function<std::shared_ptr<const twin::Twin>(const std::string&)>& make);
+           const std::function<std::shared_ptr<const twin::Twin>(const std::string&)>& make,
+           CatalogueU catalogue_u = {});
 
   const twin::Twin& nominal() const noexcept { return *nominal_; }
   const std::vector<Candidate>& candidates() const noexcept { return candidates_; }
@@ -61,6 +68,7 @@ class ScanTwin {
   std::shared_ptr<const twin::Twin> nominal_;
   twin::BudgetModel budget_;
   std::vector<Candidate> candidates_;
+  CatalogueU catalogue_u_;
 };
 
 // The point record's budget lines (4 significant digits: they are uncertainties).

@@ -46,6 +46,7 @@ inline constexpr std::array kMethodTable{
     MethodSpec{.name = "sample.create", .role = Role::technician, .blocking = true},
     MethodSpec{.name = "sample.get", .role = Role::viewer},
     MethodSpec{.name = "sample.list", .role = Role::viewer},
+    MethodSpec{.name = "sample.export", .role = Role::viewer},
     // scans
     MethodSpec{.name = "scan.submit", .role = Role::technician, .blocking = true},
     MethodSpec{.name = "scan.get", .role = Role::viewer},

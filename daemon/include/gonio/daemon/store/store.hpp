@@ -128,7 +128,7 @@ struct AlertFilter {
 
 class Store {
  public:
-  static constexpr int kSchemaVersion = 5;
+  static constexpr int kSchemaVersion = 6;
 
   // Opens (creating) the database; runs migrations. Throws Error(io_error) when the file
   // cannot be opened, Error(unsupported) when it is newer than this build.
@@ -146,7 +146,9 @@ class Store {
 
   // ---- samples
   // Throws Error(invalid_state) naming "name" when the name is taken.
-  Sample create_sample(const SampleSpec& spec, const std::string& actor);
+  // `catalogue`: JSON text of a catalogue made from a master (Sample::catalogue), or empty.
+  Sample create_sample(const SampleSpec& spec, const std::string& actor,
+                       const std::string& catalogue = {});
   std::optional<Sample> sample(std::int64_t id) const;
   std::optional<Sample> sample_by_name(const std::string& name) const;
   std::vector<Sample> samples(std::size_t offset = 0, std::size_t limit = 1000) const;
