@@ -123,7 +123,7 @@ TEST(Master, AScanOfARealMaterialIsItsCatalogueAndRepeatScansAgree) {
       << changed["verdict"].dump();
   int out = 0;
   for (const auto& p : changed["points"]) out += p["decision"] == "out_of_tolerance";
-  EXPECT_GT(out, 13) << changed["verdict"].dump();
+  EXPECT_GE(out, 5) << changed["verdict"].dump();  // 6 % against 2 %, through ~1.7 % noise per point
 }
 
 TEST(Master, AStatedModelUJoinsTheBudgetAndBadReferencesNameTheirField) {

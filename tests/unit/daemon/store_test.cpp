@@ -114,6 +114,34 @@ TEST_F(StoreTest, UsesWalMode) {
   sqlite3_close(db);
 }
 
+TEST_F(StoreTest, MigratesAVersion4StoreAddingTheCatalogueColumns) {
+  Store::create_at_version(file_, 4);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(file_.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db,
+                         "INSERT INTO samples(name, notes, bsdf, tolerance, created_at) VALUES "
+                         "('white', '', 'lambert:albedo=0.9', 0.02, '2026-01-01T00:00:00Z');",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  Store s(file_);
+  const auto white = s.sample_by_name("white");
+  ASSERT_TRUE(white.has_value());
+  EXPECT_EQ(white->spec.model_u, 0);  // as a formula was judged before: no catalogue u
+  EXPECT_EQ(white->catalogue, "");
+  SampleSpec spec;
+  spec.name = "tile";
+  spec.bsdf = "@masters/tile.ssdd";
+  spec.model_u = 0.03;
+  const auto t = s.create_sample(spec, "test", R"({"route":"master","points":[]})");
+  EXPECT_EQ(s.sample(t.id)->spec.model_u, 0.03);
+  EXPECT_EQ(s.sample(t.id)->catalogue, R"({"route":"master","points":[]})");
+  const auto j = nlohmann::json(*s.sample(t.id));
+  EXPECT_EQ(j["route"], "master");
+  EXPECT_FALSE(j["catalogue"].contains("points"));  // the data stay in the store
+  EXPECT_EQ(nlohmann::json(*white)["route"], "formula");
+}
+
 TEST_F(StoreTest, SamplesAreUniqueByName) {
   Store s(file_);
   SampleSpec spec;
