@@ -59,5 +59,6 @@ void add_render(CLI::App& app);
 void add_convert(CLI::App& app);
 void add_fit(CLI::App& app);
 void add_calibrate(CLI::App& app);
+void add_material(CLI::App& app);
 
 }  // namespace gonio::twin::cli

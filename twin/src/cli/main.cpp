@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   add_convert(app);
   add_fit(app);
   add_calibrate(app);
+  add_material(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
