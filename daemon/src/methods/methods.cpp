@@ -14,6 +14,7 @@ void register_methods(rpc::Dispatcher& d, Services& s) {
   register_instrument(reg, s);
   register_sample(reg, s);
   register_scan(reg, s);
+  register_material(reg, s);
   register_queue(reg, s);
   register_alert(reg, s);
   register_archive(reg, s);

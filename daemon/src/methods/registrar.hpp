@@ -33,6 +33,7 @@ void register_system(MethodRegistrar& r, Services& s);      // system.*
 void register_instrument(MethodRegistrar& r, Services& s);  // instrument.*
 void register_sample(MethodRegistrar& r, Services& s);      // sample.*
 void register_scan(MethodRegistrar& r, Services& s);        // scan.*
+void register_material(MethodRegistrar& r, Services& s);    // scan.material
 void register_queue(MethodRegistrar& r, Services& s);       // queue.*
 void register_alert(MethodRegistrar& r, Services& s);       // alert.*
 void register_archive(MethodRegistrar& r, Services& s);     // archive.*

@@ -57,6 +57,7 @@ inline constexpr std::array kMethodTable{
     MethodSpec{.name = "scan.points", .role = Role::viewer},
     MethodSpec{.name = "scan.export", .role = Role::viewer, .blocking = true},
     MethodSpec{.name = "scan.fit", .role = Role::technician, .blocking = true},
+    MethodSpec{.name = "scan.material", .role = Role::technician, .blocking = true},
     // queue
     MethodSpec{.name = "queue.status", .role = Role::viewer},
     MethodSpec{.name = "queue.reorder", .role = Role::technician},
