@@ -559,3 +559,13 @@ export function spacedLabels(items, gap) {
   for (const it of items) if (kept.every((k) => Math.abs(k.x - it.x) >= gap)) kept.push(it);
   return kept;
 }
+
+// scan.material's answer (twin/material.md) as the lines shown beside its download: the glTF
+// approximation's ΔE00 over the fitting geometries, then what the format approximates.
+export function materialSummary(result) {
+  const lines = [];
+  const g = result && result.gltf && result.gltf.delta_e_geometries;
+  if (g) lines.push(`glTF approximation: ΔE00 over ${g.samples} geometries mean ${fmt(g.mean, 3)}, p95 ${fmt(g.p95, 3)}, max ${fmt(g.max, 3)}`);
+  for (const n of (result && result.notes) || []) lines.push(String(n));
+  return lines;
+}

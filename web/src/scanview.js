@@ -2,8 +2,8 @@
 // verdict, points, exports, alerts, the stored fits and — for a technician — the inverse twin
 // (scan.fit), for an admin the instrument's calibration (instrument.calibrate, dry run first).
 import { useCallback, useEffect, useMemo, useRef, useState } from 'preact/hooks';
-import { html } from './ui.js';
-import { can, channelOf, checkFitModel, modelFromSpec, describeError, finished, fitRows, fmt, shortTime, verdictBadge } from './logic.js';
+import { html, download } from './ui.js';
+import { can, channelOf, checkFitModel, modelFromSpec, describeError, finished, fitRows, fmt, materialSummary, shortTime, verdictBadge } from './logic.js';
 import { ScanPanel } from './scan.js';
 
 const CAL_PARAMS = ['incidence_offset_deg', 'receive_offset_deg', 'sample_tilt_deg', 'source_aperture_scale', 'receiver_aperture_scale', 'gain'];
@@ -20,6 +20,33 @@ function useElapsed(running) {
     return () => clearInterval(id);
   }, [running]);
   return s;
+}
+
+// A stored fit's material for a renderer (scan.material, twin/material.md): Mitsuba 3 XML or
+// glTF 2.0 (fitted by ΔE00, whose error is shown), saved as a file.
+function MaterialExport({ scan, fit, call, notify }) {
+  const [busy, setBusy] = useState(null);
+  const [summary, setSummary] = useState([]);
+  const elapsed = useElapsed(!!busy);
+  const save = async (format) => {
+    setBusy(format);
+    try {
+      const r = await call('scan.material', { scan: scan.id, fit: fit.id, format });
+      download(r.filename, r.media_type, r.content);
+      setSummary(materialSummary(r));
+    } catch (e) {
+      notify(`scan.material: ${describeError(e).message || e.message}`);
+    } finally {
+      setBusy(null);
+    }
+  };
+  return html`<div class="material-export" data-testid="material-export">
+    <span>Material for a renderer:</span>
+    <button data-testid="material-mitsuba" disabled=${!!busy} onClick=${() => save('mitsuba')}>Mitsuba 3 XML</button>
+    <button data-testid="material-gltf" disabled=${!!busy} onClick=${() => save('gltf')}>glTF 2.0</button>
+    ${busy && html`<span role="status" data-testid="material-progress"><progress aria-label="writing the material"></progress> ${busy === 'gltf' ? 'fitting the glTF material…' : 'writing…'} ${elapsed} s</span>`}
+    ${summary.length > 0 && html`<ul class="muted" data-testid="material-summary">${summary.map((l) => html`<li>${l}</li>`)}</ul>`}
+  </div>`;
 }
 
 // A FitResult (twin/fitting.md): the parameters ± u beside the naive fit and its bias, χ²/dof
@@ -204,6 +231,7 @@ export function ScanView({ scanId, samples, status, role, call, bus, thresholds,
           <code>${f.model}</code> <span class="muted">χ²/dof ${fmt(f.result && f.result.chi2_per_dof, 3)} · ${f.created_by} · ${shortTime(f.created_at)}</span></li>`)}
       </ul>
       ${shown && html`<${FitResult} fit=${shown} />`}
+      ${shown && shown.kind === 'fit' && shown.id != null && can(role, 'fit') && html`<${MaterialExport} scan=${scan} fit=${shown} call=${call} notify=${notify} />`}
       ${shown && shown.kind === 'fit' && html`<p class="muted" data-testid="fit-curve" data-drawn=${String(!!curve)}>${curve ? 'The fitted model, through the twin, is drawn over the points.' : 'Predicting the fitted curve…'}</p>`}
       ${can(role, 'fit') && scan && (scan.points_done > 0
         ? html`<h3>Fit a model</h3><${FitForm} scan=${scan} sampleSpec=${sample && sample.bsdf} call=${call} notify=${notify}
