@@ -27,7 +27,14 @@ double pow7(double x) { return x * x * x * x * x * x * x; }
 
 }  // namespace
 
-double delta_e2000(const Lab& lab1, const Lab& lab2, double kl, double kc, double kh) {
+namespace {
+
+// tl, tc, th and RT of eq. (22): ΔE00² = tl² + tc² + th² + RT tc th.
+struct Terms {
+  double tl, tc, th, rt;
+};
+
+Terms terms(const Lab& lab1, const Lab& lab2, double kl, double kc, double kh) {
   const double pow25_7 = pow7(25.0);
   // eq. (2)–(7): a' stretched by G, then C' and h'
   const double c1 = std::hypot(lab1.a, lab1.b);
@@ -73,10 +80,20 @@ double delta_e2000(const Lab& lab1, const Lab& lab2, double kl, double kc, doubl
   const double sh = 1 + 0.015 * c_mean * t;
   const double rt = -sind(2 * d_theta) * rc;
 
-  const double tl = dl / (kl * sl);
-  const double tc = dc / (kc * sc);
-  const double th = d_big_h / (kh * sh);
+  return {dl / (kl * sl), dc / (kc * sc), d_big_h / (kh * sh), rt};
+}
+
+}  // namespace
+
+double delta_e2000(const Lab& lab1, const Lab& lab2, double kl, double kc, double kh) {
+  const auto [tl, tc, th, rt] = terms(lab1, lab2, kl, kc, kh);
   return std::sqrt(std::max(0.0, tl * tl + tc * tc + th * th + rt * tc * th));
+}
+
+std::array<double, 3> delta_e2000_terms(const Lab& lab1, const Lab& lab2) {
+  // tc² + th² + RT tc th = (tc + RT/2 th)² + (1 − RT²/4) th², |RT| ≤ 2 (RC ≤ 2).
+  const auto [tl, tc, th, rt] = terms(lab1, lab2, 1, 1, 1);
+  return {tl, tc + 0.5 * rt * th, th * std::sqrt(std::max(0.0, 1 - 0.25 * rt * rt))};
 }
 
 }  // namespace gonio::twin

@@ -2,7 +2,8 @@
 // material and the glTF reference BRDF (the twin's `gltf` model), rather than mapped by a
 // formula, then checked on the studio render.
 //
-// Objective: ΔE00 over a dense set of geometries, as a point light of unit irradiance shows
+// Objective: Σ ΔE00² over a dense set of geometries (the solver's residuals are ΔE00's three
+// signed terms, delta_e2000_terms), as a point light of unit irradiance shows
 // them — θi every 10° to 80°, receivers about the specular direction at radial angles from
 // 0° to 90° (dense near the peak) and five azimuths about it — each colour the displayed
 // one of π f cos θi (clipped linear sRGB, CIELAB, as the sphere render displays a pixel).
@@ -60,6 +61,16 @@ struct Summary {
     return s;
   }
 };
+
+// The residuals the solver sees: ΔE00's three signed terms per pair (Σ of their squares is
+// Σ ΔE00²), smooth where ΔE00 itself has a kink at 0.
+std::vector<double> delta_e_terms(const std::vector<Lab>& a, const std::vector<Lab>& b) {
+  std::vector<double> out;
+  out.reserve(3 * a.size());
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (const double t : delta_e2000_terms(a[i], b[i])) out.push_back(t);
+  return out;
+}
 
 std::vector<double> delta_e(const std::vector<Lab>& a, const std::vector<Lab>& b) {
   std::vector<double> out(a.size());
@@ -147,11 +158,11 @@ GltfFit fit_gltf(const Bsdf& target, const GltfFitOptions& options) {
     problem.group.push_back(static_cast<int>(j));
   }
   problem.channels = 1;
-  problem.measured.assign(pairs.size(), 0.0);
-  problem.u.assign(pairs.size(), 1.0);
+  problem.measured.assign(3 * pairs.size(), 0.0);
+  problem.u.assign(3 * pairs.size(), 1.0);
   problem.evaluate = [&](const std::vector<double>& x, std::vector<double>& beta, std::vector<double>& se) {
     const auto model = make_bsdf(gltf_spec(material_of(x, ior)), grid);
-    beta = delta_e(reference, geometry_colors(*model, pairs));
+    beta = delta_e_terms(reference, geometry_colors(*model, pairs));
     se.assign(beta.size(), 0.0);
   };
   FitOptions fo;

@@ -64,6 +64,21 @@ TEST(Ciede2000, MatchesSharmaWuDalal2005TestData) {
   }
 }
 
+// The signed terms a least-squares fit uses: their squares sum to ΔE00² on the published
+// pairs (the rotation term included: pairs 1–6 are blue, where RT is largest), and the
+// lightness term carries the sign of ΔL.
+TEST(Ciede2000, SignedTermsSquareToTheDifference) {
+  int n = 0;
+  for (const auto& p : kSharma2005) {
+    ++n;
+    const auto t = delta_e2000_terms(p.lab1, p.lab2);
+    EXPECT_NEAR(std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]), delta_e2000(p.lab1, p.lab2), 1e-12)
+        << "pair " << n;
+  }
+  EXPECT_LT(delta_e2000_terms(Lab{51, 0, 0}, Lab{49, 0, 0})[0], 0);
+  EXPECT_GT(delta_e2000_terms(Lab{49, 0, 0}, Lab{51, 0, 0})[0], 0);
+}
+
 TEST(Ciede2000, IsZeroForEqualColorsAndGrowsWithDistance) {
   const Lab c{42, 13, -7};
   EXPECT_EQ(delta_e2000(c, c), 0.0);

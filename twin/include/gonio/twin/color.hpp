@@ -139,6 +139,10 @@ Lab spectrum_to_lab(const Spectrum& s, std::string_view illuminant = "D65",
 // factors kL = kC = kH = 1 unless given.
 double delta_e2000(const Lab& lab1, const Lab& lab2, double kl = 1, double kc = 1,
                    double kh = 1);
+// ΔE00 as three signed terms whose squares sum to ΔE00²: the lightness term, and the chroma
+// and hue terms with the rotation term RT·ΔC'·ΔH' folded in (a Cholesky factor of their
+// quadratic form). A smooth residual for least squares where ΔE00 itself has a kink at 0.
+std::array<double, 3> delta_e2000_terms(const Lab& lab1, const Lab& lab2);
 // ΔE00 between the colours of two reflectance spectra (grids may differ).
 double delta_e2000(const Spectrum& s1, const Spectrum& s2, std::string_view illuminant = "D65",
                    ObserverKind observer = ObserverKind::cie1964_10deg);
