@@ -91,16 +91,17 @@ void write_merl(const std::string& path, const Bsdf& model) {
   if (!out) throw Error(Errc::io_error, fmt::format("cannot write '{}'", path), "output");
 }
 
-RoundTrip merl_round_trip(const Bsdf& model, const Bsdf& table) {
+RoundTrip merl_round_trip(const Bsdf& model, const Bsdf& table, double max_theta_r) {
   constexpr double kFloor = 0.01 * kInvPi;  // β = 0.01: below it, differences are absolute
   RoundTrip r;
   std::array<double, 3> a{}, b{};
   double sum = 0;
   std::size_t count = 0;
-  for (int ti = 0; ti <= 80; ti += 5) {
+  const int last = static_cast<int>(max_theta_r);
+  for (int ti = 0; ti <= std::min(80, last); ti += 5) {
     const double t = ti * kDegToRad;
     const Vec3 wi{-std::sin(t), 0, std::cos(t)};
-    for (int tr = -85; tr <= 85; ++tr) {
+    for (int tr = -last; tr <= last; ++tr) {
       const double u = tr * kDegToRad;
       const Vec3 wo{std::sin(u), 0, std::cos(u)};
       model.eval(wi, wo, a);

@@ -112,14 +112,15 @@ void write_merl(std::ostream& out, const Bsdf& model);
 void write_merl(const std::string& path, const Bsdf& model);
 
 // The largest relative difference between `table` (as the twin reads it back) and `model`
-// over the in-plane hemisphere: θi 0–80° every 5°, θr −85…85° every 1°, on the three MERL
+// over the in-plane hemisphere: θi 0–min(80°, max_theta_r) every 5°, θr ±max_theta_r every
+// 1°, on the three MERL
 // wavelengths, relative to max(f_model, 0.01/π) (below a radiance factor of 0.01 the
 // difference counts as absolute).
 struct RoundTrip {
   double max_rel = 0, mean_rel = 0;
   double theta_i = 0, theta_r = 0;  // where the largest is
 };
-RoundTrip merl_round_trip(const Bsdf& model, const Bsdf& table);
+RoundTrip merl_round_trip(const Bsdf& model, const Bsdf& table, double max_theta_r = 85);
 
 // ---- the command's whole job ------------------------------------------------------------------
 struct ExportReport {
