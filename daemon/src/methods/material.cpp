@@ -58,7 +58,7 @@ rpc::Result scan_material(Services& s, rpc::Call& c) {
   twin::material::GltfFitOptions options;
   options.render_check = false;  // the geometries' ΔE00 only: a render would hold the worker for minutes
   const auto report = methods::with_field("fit", [&] {
-    return twin::material::export_material(spec, *format, path, twin::WavelengthGrid::visible(), options);
+    return twin::material::export_material(spec, *format, path, WavelengthGrid::visible(), options);
   });
   std::ifstream in(path, std::ios::binary);
   std::string content((std::istreambuf_iterator<char>(in)), {});
