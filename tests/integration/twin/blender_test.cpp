@@ -11,7 +11,9 @@
 // the separable one, and whose Fresnel differs from Schlick's near grazing; and each render
 // carries its own noise (Cycles at 128 samples per pixel; the twin at 1 % per pixel). A
 // mismatch of convention — the scene's units, axes, colour space, a lost extension — shows
-// as a difference of 10 or more, which the bound rejects.
+// as a difference of 10 or more, which the bound rejects: with the key light mirrored in
+// Blender's scene alone (azimuth + 180°) the paint differs by 16.4 and the gold by 11.2;
+// as written they differ by about 1 (twin/material.md).
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -138,7 +140,9 @@ TEST(Blender, RendersTheExportedGltfAsTheTwinDoes) {
     FAIL() << "Debian's blender is not installed (.ci/bootstrap --test installs it)";
   std::vector<Rendered> renders;
   for (const char* spec : {"plastic:albedo=400:0.05,500:0.1,600:0.6,700:0.7,alpha=0.08,ior=1.5",
-                           "conductor:alpha=0.15,eta=400:1.5,700:0.2,k=400:1.9,700:3.6"}) {
+                           "conductor:alpha=0.15,eta=400:1.5,700:0.2,k=400:1.9,700:3.6",
+                           // the real table's fit (twin/fitting.md, "A table nobody here made")
+                           "plastic:albedo=0.217,alpha=0.268,ior=1.52"}) {
     gonio::test::TempDir dir("blender");
     renders.push_back(render_both(spec, dir));
     const auto c = compare(renders.back().blender, renders.back().twin);

@@ -5,6 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <sstream>
 
 #include "gonio/proto/error.hpp"
@@ -66,6 +69,47 @@ TEST(MerlOut, RoundTripWithinOnePercentInPlaneTo75Degrees) {
     const auto g = material::merl_round_trip(*model, table, 85);
     EXPECT_LE(g.max_rel, 0.02) << spec << " at θi=" << g.theta_i << " θr=" << g.theta_r;
     EXPECT_LE(g.mean_rel, 0.002) << spec;
+  }
+}
+
+// The bytes as the database's own reader (MERL's BRDFRead.cpp, Matusik et al. 2003) takes
+// them, decoded here without the twin's reader: three little-endian int32 dimensions
+// (90, 90, 180), then the red, green and blue blocks of doubles, the sample of (θh index,
+// θd index, φd index) at φd + 180·θd + 180·90·θh, f = value × 1/1500, 1.15/1500, 1.66/1500.
+// A node's angles are θh = 90°·(k/90)², θd = 90°·k/90, φd = 180°·k/180.
+TEST(MerlOut, LayoutIsTheDatabases) {
+  const auto model = make_bsdf("conductor:alpha=0.3,eta=400:1.5,700:0.2,k=400:1.9,700:3.6", rgb());
+  std::stringstream s;
+  material::write_merl(s, *model);
+  const std::string bytes = s.str();
+  const auto i32 = [&](std::size_t at) {
+    std::uint32_t v = 0;
+    for (int k = 3; k >= 0; --k) v = v << 8 | static_cast<unsigned char>(bytes[at + static_cast<std::size_t>(k)]);
+    return v;
+  };
+  ASSERT_EQ(i32(0), 90u);
+  ASSERT_EQ(i32(4), 90u);
+  ASSERT_EQ(i32(8), 180u);
+  const std::size_t n = 90 * 90 * 180;
+  const double scale[3] = {1.0 / 1500, 1.15 / 1500, 1.66 / 1500};  // R, G, B
+  for (const auto& [ih, id, ip] : {std::array<std::size_t, 3>{30, 10, 0}, {50, 40, 90}, {12, 70, 150}}) {
+    const double th = 90.0 * std::pow(static_cast<double>(ih) / 90, 2) * kDegToRad;
+    const double td = 90.0 * static_cast<double>(id) / 90 * kDegToRad, pd = static_cast<double>(ip) * kDegToRad;
+    // Rusinkiewicz: the difference vector d about the half vector h = (sin θh, 0, cos θh).
+    const Vec3 d{std::sin(td) * std::cos(pd), std::sin(td) * std::sin(pd), std::cos(td)};
+    const Vec3 wi{std::cos(th) * d.x + std::sin(th) * d.z, d.y, -std::sin(th) * d.x + std::cos(th) * d.z};
+    const Vec3 h{std::sin(th), 0, std::cos(th)};
+    const Vec3 wo = 2 * dot(wi, h) * h - wi;
+    ASSERT_GT(wi.z, 0);
+    ASSERT_GT(wo.z, 0);
+    std::array<double, 3> f{};  // 464.3, 549.1, 611.5 nm: B, G, R
+    model->eval(wi, wo, f);
+    const std::size_t ind = ip + 180 * id + 180 * 90 * ih;
+    for (std::size_t c = 0; c < 3; ++c) {
+      double v = 0;
+      std::memcpy(&v, bytes.data() + 12 + 8 * (c * n + ind), 8);
+      EXPECT_NEAR(v * scale[c], f[2 - c], 1e-12 * f[2 - c]) << "channel " << c << " node " << ih << "," << id << "," << ip;
+    }
   }
 }
 
