@@ -655,6 +655,18 @@ describe('dashboard', () => {
     await page.waitForSelector(`${$('fit-curve')}[data-drawn="true"]`, { timeout: T * 2 });
     await page.waitForFunction((s) => /fitted model/.test(document.querySelector(s)?.textContent || ''), { timeout: T }, `${$('scan-plot')} .u-legend`);
     await shot('14-fit');
+    // The fitted material saved for a renderer (scan.material): a glTF sphere, its ΔE00 shown.
+    await page.evaluate(() => {
+      window.__saved = [];
+      const create = URL.createObjectURL.bind(URL);
+      URL.createObjectURL = (blob) => { window.__saved.push(blob); return create(blob); };
+    });
+    await page.click($('material-gltf'));
+    await page.waitForFunction((s) => /glTF approximation: ΔE00 over \d+ geometries mean/.test(document.querySelector(s)?.textContent || ''), { timeout: T * 2 }, $('material-summary'));
+    const gltf = JSON.parse(await page.evaluate(() => window.__saved[0].text()));
+    assert.equal(gltf.asset.version, '2.0');
+    assert.ok(gltf.materials[0].pbrMetallicRoughness.metallicFactor < 0.5, 'a grey diffuser is not a metal');
+    await shot('14-fit-material');
   });
 
   it('calibrates as an admin: a dry run first, the profile kept', async () => {
