@@ -1,4 +1,4 @@
-// gonioctl scan: submit, get, list, pause, resume, cancel, points, export, fit, watch.
+// gonioctl scan: submit, get, list, pause, resume, cancel, points, export, fit, material, watch.
 #include <cmath>
 #include <cstdint>
 #include <fstream>
@@ -86,10 +86,46 @@ struct ScanArgs {
   std::string format = "csv", output;
   std::string model;
   std::uint64_t samples = 0;
+  std::int64_t fit = 0;  // scan material: 0 for the newest fit
   std::string adaptive;  // scan submit: "parameters" or "curve"
   double target_rel_u = 0.05, tolerance = 0.01;
   int max_points = 50;
 };
+
+// gonioctl scan material ID --format mitsuba|gltf [--fit N] [-o FILE]: scan.material's file
+// written out, with the glTF approximation's ΔE00 and the notes (twin/material.md).
+void add_material_command(CLI::App* scan, Context& ctx, const std::shared_ptr<ScanArgs>& a) {
+  auto* c = scan->add_subcommand("material", "write a stored fit's material for a renderer: Mitsuba 3 XML or glTF 2.0");
+  c->add_option("scan", a->id, "scan id")->required();
+  c->add_option("--format", a->format, "mitsuba or gltf")->check(CLI::IsMember({"mitsuba", "gltf"}))->required();
+  c->add_option("--fit", a->fit, "the fit's id (default: the newest)");
+  c->add_option("--output,-o", a->output, "file (default: scanN-fitM.xml or .gltf)");
+  c->callback([&ctx, a] {
+    ctx.action = [a](Session& s) {
+      json p{{"scan", a->id}, {"format", a->format}};
+      if (a->fit > 0) p["fit"] = a->fit;
+      const auto r = s.call("scan.material", p);
+      const auto path = a->output.empty() ? r["filename"].get<std::string>() : a->output;
+      std::ofstream out(path, std::ios::binary | std::ios::trunc);
+      out << r["content"].get<std::string>();
+      out.close();
+      if (!out) throw Error(Errc::io_error, fmt::format("cannot write {}", path));
+      json summary = r;
+      summary.erase("content");
+      summary["file"] = path;
+      print(s.options(), summary, [&] {
+        std::cout << fmt::format("wrote {} (scan {} fit {}, {})\n", path, cell(r["scan"]), cell(r["fit"]), cell(r["format"]));
+        if (r.contains("gltf")) {
+          const auto& d = r["gltf"]["delta_e_geometries"];
+          std::cout << fmt::format("glTF approximation: ΔE00 over {} geometries: mean {:.2f}, p95 {:.2f}, max {:.2f}\n",
+                                   cell(d["samples"]), d["mean"].get<double>(), d["p95"].get<double>(), d["max"].get<double>());
+        }
+        for (const auto& n : r["notes"]) std::cout << "note: " << n.get<std::string>() << '\n';
+      });
+      return 0;
+    };
+  });
+}
 
 }  // namespace
 
@@ -281,6 +317,7 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
       return 0;
     };
   });
+  add_material_command(scan, ctx, a);
   id_cmd("watch", "follow a scan live until it ends")->callback([&ctx, a] {
     ctx.action = [a](Session& s) { return watch_scan(s, a->id, s.options().json); };
   });

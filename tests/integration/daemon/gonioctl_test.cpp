@@ -2,6 +2,9 @@
 // README's main job (`gonioctl demo`) end to end.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <iterator>
+
 #include "gonio/test/daemon_harness.hpp"
 
 namespace gonio::test {
@@ -51,6 +54,17 @@ TEST(Gonioctl, CommandsTablesJsonAndExitCodes) {
   r = gonioctl({"--state-dir", sd, "scan", "export", "1", "--format", "csv", "-o", file});
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(fs::file_size(file) > 100);
+  // A fitted material written for a renderer: a scan without a fit is refused (exit 6),
+  // then the fit's Mitsuba scene is written to a file.
+  const auto xml = (dir.path / "tile.xml").string();
+  EXPECT_EQ(gonioctl({"--state-dir", sd, "scan", "material", "1", "--format", "mitsuba", "-o", xml}).code, 6);
+  ASSERT_EQ(gonioctl({"--state-dir", sd, "scan", "fit", "1", "--model", "lambert:albedo=?", "--samples", "1024"}).code, 0);
+  r = gonioctl({"--state-dir", sd, "scan", "material", "1", "--format", "mitsuba", "-o", xml});
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("wrote " + xml), std::string::npos) << r.out;
+  std::ifstream in(xml);
+  const std::string scene((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_NE(scene.find(R"(<bsdf type="diffuse">)"), std::string::npos) << scene;
   // Exit codes follow the server's error.
   EXPECT_EQ(gonioctl({"--state-dir", sd, "scan", "get", "99"}).code, 5);
   r = gonioctl({"--state-dir", sd, "scan", "submit", "--sample", "tile", "--geometry", "45/-88"});
