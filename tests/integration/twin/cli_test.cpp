@@ -247,3 +247,31 @@ TEST(GonioTwinCli, RenderRefusesBadOptionsNamingTheFlag) {
 }
 
 }  // namespace
+
+// gonio-twin material: each format written with its report; what a format cannot express
+// is refused with exit 2, the message naming the lobe and the format, and no file written.
+TEST(GonioTwinCli, MaterialWritesEachFormatAndRefusesWhatItCannotExpress) {
+  TempDir dir("material");
+  const auto path = [&](const char* name) { return (dir.path() / name).string(); };
+  auto r = gonio_twin("material --bsdf conductor:alpha=0.2,eta=0.2,k=3.9 --format merl --json --output " +
+                      path("silver.binary"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(fs::file_size(path("silver.binary")), 12u + 3u * 90 * 90 * 180 * 8);
+  EXPECT_LT(nlohmann::json::parse(r.out)["merl"]["max_rel"].get<double>(), 0.02) << r.out;
+  r = gonio_twin("material --bsdf 'lambert:albedo=0.3+coat:alpha=0.1,ior=1.5' --format mitsuba --output " +
+                 path("paint.xml"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("note: coat"), std::string::npos) << r.out;
+  r = gonio_twin("material --bsdf lambert:albedo=0.5 --format gltf --no-render --json --output " + path("grey.gltf"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(nlohmann::json::parse(r.out)["gltf"].contains("delta_e_studio"));
+  std::ifstream in(path("grey.gltf"));
+  EXPECT_EQ(nlohmann::json::parse(in)["asset"]["version"], "2.0");
+
+  r = gonio_twin("material --bsdf oren-nayar:albedo=0.5,sigma=20 --format mitsuba --output " + path("no.xml"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("oren-nayar"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("Mitsuba 3 XML"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("no.xml")));
+  EXPECT_EQ(gonio_twin("material --bsdf lambert --format obj --output " + path("x.obj")).code, 2);
+}
