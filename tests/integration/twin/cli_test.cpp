@@ -274,4 +274,10 @@ TEST(GonioTwinCli, MaterialWritesEachFormatAndRefusesWhatItCannotExpress) {
   EXPECT_NE(r.err.find("Mitsuba 3 XML"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(path("no.xml")));
   EXPECT_EQ(gonio_twin("material --bsdf lambert --format obj --output " + path("x.obj")).code, 2);
+  // A measured BTDF: MERL holds reflection only.
+  r = gonio_twin(std::string("material --bsdf @") + GONIO_SOURCE_DIR + "/tests/fuzz/corpus/issa/btdf.bsdf --format merl --output " +
+                 path("btdf.binary"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("the table transmits"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("btdf.binary")));
 }

@@ -52,6 +52,7 @@ ExportReport export_material(std::string_view spec, Format format, const std::st
       break;
     }
     case Format::gltf: {
+      refuse_transmission(spec, grid, "glTF 2.0");
       const auto lobes = canonical_lobes(spec, grid);
       GltfMaterial m;
       if (lobes.size() == 1 && lobes[0].name == "gltf") {
@@ -66,6 +67,7 @@ ExportReport export_material(std::string_view spec, Format format, const std::st
       break;
     }
     case Format::merl: {
+      refuse_transmission(spec, grid, "MERL");
       const WavelengthGrid rgb(std::vector<double>(kRgbWavelengthsNm.begin(), kRgbWavelengthsNm.end()));
       const auto model = make_bsdf(spec, rgb);
       write_merl(path, *model);

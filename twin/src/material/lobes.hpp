@@ -29,4 +29,9 @@ std::vector<Lobe> canonical_lobes(std::string_view spec, const WavelengthGrid& g
 // Error(unsupported) naming the lobe (field "bsdf.<lobe>") and the format.
 [[noreturn]] void refuse(std::string_view lobe, std::string_view format, std::string_view why);
 
+// For the formats that hold reflection only (glTF as written, MERL): refuses a spec with a
+// lobe that transmits — `dielectric`, or a table with transmitted light — rather than drop
+// that light silently.
+void refuse_transmission(std::string_view spec, const WavelengthGrid& grid, std::string_view format);
+
 }  // namespace gonio::twin::material
