@@ -267,6 +267,14 @@ TEST(GonioTwinCli, MaterialWritesEachFormatAndRefusesWhatItCannotExpress) {
   EXPECT_FALSE(nlohmann::json::parse(r.out)["gltf"].contains("delta_e_studio"));
   std::ifstream in(path("grey.gltf"));
   EXPECT_EQ(nlohmann::json::parse(in)["asset"]["version"], "2.0");
+  // The material and its glTF approximation side by side, with their ΔE00 map.
+  r = gonio_twin("material --bsdf conductor:alpha=0.2,eta=0.2,k=3.9 --format gltf --size 32 --pixel-rel-se 0.05 "
+                 "--output " + path("silver.gltf") + " --plot " + path("silver.png"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("ΔE00 studio render"), std::string::npos) << r.out;
+  EXPECT_GT(fs::file_size(path("silver.png")), 500u);
+  EXPECT_EQ(gonio_twin("material --bsdf lambert --format gltf --no-render --plot " + path("no.png") + " --output " +
+                       path("no.gltf")).code, 2);
 
   r = gonio_twin("material --bsdf oren-nayar:albedo=0.5,sigma=20 --format mitsuba --output " + path("no.xml"));
   EXPECT_EQ(r.code, 2);

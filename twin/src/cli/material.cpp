@@ -94,12 +94,15 @@ void add_material(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--threads", opts->check.threads, "worker threads (0: all cores)")->capture_default_str();
   sub->add_flag("--no-render", *no_render, "glTF: skip the studio render check (geometries only)");
+  sub->add_option("--plot", opts->plot, "glTF: the material and its approximation side by side with their ΔE00 map (PNG)");
   sub->add_flag("--json", *json, "JSON summary on stdout");
   sub->callback([=] {
     exit_code() = guarded([&] {
       const auto t0 = std::chrono::steady_clock::now();
       opts->check.validate();
       opts->render_check = !*no_render;
+      if (*no_render && !opts->plot.empty())
+        throw Error::invalid("plot", "--plot draws the studio render, which --no-render skips");
       const auto grid = WavelengthGrid::parse(*wavelengths);
       const auto f = from_text<material::Format>(*format);
       const auto r = material::export_material(*bsdf, *f, *output, grid, *opts);

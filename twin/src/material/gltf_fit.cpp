@@ -195,11 +195,11 @@ GltfFit fit_gltf(const Bsdf& target, const GltfFitOptions& options) {
   const auto fitted = make_bsdf(best.spec, grid);
   best.geometries = Summary{delta_e(reference, geometry_colors(*fitted, pairs))}.stats();
   if (options.render_check) {
-    const auto a = render_sphere(target, options.check);
-    const auto b = render_sphere(*fitted, options.check);
-    const auto map = delta_e_map(a, b, options.check);
-    best.studio = DeltaESummary{map.stats.mean, map.stats.p95, map.stats.max, map.stats.pixels};
-    best.studio_noise_mean = map.stats.noise_mean;
+    const auto c = render_comparison({&target, fitted.get()}, {"material", "glTF approximation"}, options.check);
+    const auto& stats = c.maps[0].stats;
+    best.studio = DeltaESummary{stats.mean, stats.p95, stats.max, stats.pixels};
+    best.studio_noise_mean = stats.noise_mean;
+    if (!options.plot.empty()) write_png(c.image, options.plot);
   }
   return best;
 }

@@ -75,6 +75,7 @@ struct GltfFitOptions {
   int max_iterations = 40;
   RenderOptions check;   // the studio render the result is checked on
   bool render_check = true;
+  std::string plot;      // when not empty: the two studio renders and their ΔE00 map, a PNG
 };
 struct DeltaESummary {
   double mean = 0, p95 = 0, max = 0;
