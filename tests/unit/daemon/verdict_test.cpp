@@ -1,6 +1,7 @@
 // The scan's verdict (verdict.hpp) on synthetic scans whose truth is known: points made from
 // a linear model of the instrument and the sample, with noise at the stated uncertainties.
 // And the spec handling the verdict and its diagnosis rest on (scan_twin.hpp, diagnosis.hpp).
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -49,6 +50,7 @@ std::vector<PointRecord> scan(const Truth& t, int n, std::uint64_t seed, double 
     }
     PointRecord r;
     r.index = i;
+    r.planned = Geometry::in_plane(45, 45 + 10 * x);
     r.measured = Spectrum(kGrid, m, um);
     r.predicted = Spectrum(kGrid, p, sp);
     const double ua = 0.5 / std::sqrt(3.0);
@@ -191,6 +193,154 @@ TEST(Verdict, AgreesWhenNothingDiffers) {
   const auto j = v.to_json();
   EXPECT_EQ(j["cause"], nullptr);
   EXPECT_EQ(j["points_used"], 61);
+}
+
+// The same scan with the albedo as three nodes, each acting on its own channel, changed by
+// `change` (relative), and random arm scatter of `scatter_deg` per move along the receive
+// arm's sensitivity (stated: u 0.03°).
+std::vector<PointRecord> spectral(const std::array<double, 3>& change, std::uint64_t seed, double scatter_deg = 0,
+                                  double gain = 0) {
+  auto points = scan({.gain = gain}, 61, seed);
+  std::mt19937_64 rng(seed + 1000);
+  std::normal_distribution<double> gauss(0, 1);
+  for (auto& p : points) {
+    const auto& srcv = p.budget[1].sensitivity;
+    auto& rep = p.budget[2];
+    const double delta = scatter_deg * gauss(rng);
+    rep.sensitivity.clear();
+    rep.contribution.clear();
+    for (std::size_t c = 0; c < 3; ++c) {
+      rep.sensitivity.push_back(std::abs(srcv[c]));
+      rep.contribution.push_back(0.03 * std::abs(srcv[c]));
+      p.measured.values[c] += srcv[c] * delta;
+    }
+    std::vector<SampleSensitivity> nodes;
+    for (std::size_t k = 0; k < 3; ++k) {
+      std::vector<double> s(3, 0.0);
+      s[k] = p.predicted->values[k] / 0.45;
+      p.measured.values[k] += s[k] * 0.45 * change[k];
+      nodes.push_back({fmt::format("lambert.albedo@{}", 450 + 100 * k), 0.45, s});
+    }
+    p.sample_sensitivity = nodes;
+  }
+  return points;
+}
+
+TEST(Verdict, ANamedCauseLeavesAChi2ConsistentWithItsDegreesOfFreedom) {
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    const auto v = judge(scan({.albedo_600 = 0.45 * 0.04}, 61, seed));
+    ASSERT_TRUE(v.cause.has_value()) << v.summary;
+    EXPECT_TRUE(v.explained);
+    EXPECT_GE(v.p_value, ScanEvidence::kConsistent) << v.summary;
+  }
+}
+
+TEST(Verdict, NodesMovingTogetherAreNamedAsTheirBandWithItsSign) {
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    const auto v = judge(spectral({0, 0.04, 0.04}, seed));
+    EXPECT_EQ(v.decision, "out_of_tolerance") << v.summary;
+    ASSERT_TRUE(v.cause.has_value()) << v.summary;
+    EXPECT_EQ(v.cause->parameter, "lambert.albedo@550-650");
+    ASSERT_TRUE(v.cause->band_nm.has_value());
+    EXPECT_EQ((*v.cause->band_nm)[0], 550);
+    EXPECT_EQ((*v.cause->band_nm)[1], 650);
+    EXPECT_NEAR(v.cause->value, 1.04, 3 * v.cause->u + 1e-9) << v.summary;
+    EXPECT_EQ(v.to_json()["cause"]["band_nm"], nlohmann::json({550, 650}));
+    const auto down = judge(spectral({0, -0.04, -0.04}, seed));
+    ASSERT_TRUE(down.cause.has_value()) << down.summary;
+    EXPECT_NEAR(down.cause->value, 0.96, 3 * down.cause->u + 1e-9) << down.summary;
+  }
+  // One node alone is still that node.
+  const auto one = judge(spectral({0, 0, 0.04}, 3));
+  ASSERT_TRUE(one.cause.has_value()) << one.summary;
+  EXPECT_EQ(one.cause->parameter, "lambert.albedo@650");
+}
+
+TEST(Verdict, AWholeSpectrumScaledAndAWhiteGainAreOneToTheDataButBothAlert) {
+  // On a sample whose β is its albedo times a shape, the whole albedo scaled and the white's
+  // gain move every channel alike: the verdict names neither, lists both, and alerts.
+  const auto v = judge(spectral({0.05, 0.05, 0.05}, 4));
+  EXPECT_FALSE(v.cause.has_value()) << v.summary;
+  EXPECT_TRUE(v.alerts()) << v.summary;
+  bool gain = false, whole = false;
+  for (const auto& a : v.alike) {
+    gain = gain || a.parameter == "gain";
+    whole = whole || a.parameter == "lambert.albedo@450-650";
+  }
+  EXPECT_TRUE(gain && whole) << v.summary;
+}
+
+// A catalogue without parameters (a master): its β scaled over the verdict's wavelength bands.
+std::vector<PointRecord> master(const std::array<double, 3>& change, std::uint64_t seed, double gain = 0) {
+  auto points = spectral(change, seed, 0, gain);
+  for (auto& p : points) p.sample_sensitivity.clear();
+  return points;
+}
+
+TEST(Verdict, AMasterScaledInOneBandIsNamedAsThatBandOfTheCatalogue) {
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    const auto v = judge(master({0, 0, 0.05}, seed));
+    EXPECT_EQ(v.decision, "out_of_tolerance") << v.summary;
+    ASSERT_TRUE(v.cause.has_value()) << v.summary;
+    EXPECT_EQ(v.cause->parameter, "catalogue@650-650");
+    EXPECT_NEAR(v.cause->value, 1.05, 3 * v.cause->u + 1e-9) << v.summary;
+    EXPECT_TRUE(v.explained);
+  }
+  // All of it brighter is what a white's gain does: the verdict says both and alerts.
+  const auto all = judge(master({0.05, 0.05, 0.05}, 2));
+  EXPECT_FALSE(all.cause.has_value()) << all.summary;
+  EXPECT_TRUE(all.alerts()) << all.summary;
+  bool gain = false, whole = false;
+  for (const auto& a : all.alike) {
+    gain = gain || a.parameter == "gain";
+    whole = whole || a.parameter == "catalogue@450-650";
+  }
+  EXPECT_TRUE(gain && whole) << all.summary;
+  // And an unchanged master agrees.
+  for (std::uint64_t seed = 20; seed < 30; ++seed) EXPECT_FALSE(judge(master({0, 0, 0}, seed)).alerts());
+}
+
+TEST(Verdict, AMisfitNoParameterExplainsNamesNoCauseAndItsRegions) {
+  // A bump of +6 % over five points near the peak's flank: no column has that shape.
+  auto points = scan({}, 61, 9);
+  for (std::size_t i = 40; i < 45; ++i)
+    for (auto& m : points[i].measured.values) m *= 1.06;
+  const auto v = judge(points);
+  EXPECT_FALSE(v.cause.has_value()) << v.summary;
+  EXPECT_FALSE(v.explained);
+  EXPECT_LT(v.p_value, ScanEvidence::kConsistent);
+  EXPECT_EQ(v.decision, "out_of_tolerance") << v.summary;
+  ASSERT_FALSE(v.regions.empty());
+  // Points 40–44 lie at θr 45 + 10·x, x = −2 + 4i/60: aspecular −8.7…−6.0°, the bin −10…0°.
+  EXPECT_EQ(v.regions.front().aspecular_lo, -10);
+  EXPECT_GT(v.regions.front().mean_rel, 0);
+  EXPECT_NE(v.summary.find("no single parameter explains it"), std::string::npos) << v.summary;
+  EXPECT_FALSE(v.to_json()["explained"].get<bool>());
+}
+
+TEST(Verdict, ScatterBeyondTheStatedRepeatabilityIsTheInstrumentNotTheSample) {
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    const auto v = judge(spectral({0, 0, 0}, seed, 0.15));
+    ASSERT_TRUE(v.cause.has_value()) << v.summary;
+    EXPECT_EQ(v.cause->parameter, "position_repeatability_deg") << v.summary;
+    EXPECT_EQ(v.cause->kind, "instrument");
+    EXPECT_NEAR(v.cause->value, std::hypot(0.15, 0.03), 0.3 * 0.15) << v.summary;
+    EXPECT_DOUBLE_EQ(v.cause->nominal, 0.03);
+    ASSERT_TRUE(v.calibration_hint.has_value());
+    EXPECT_FALSE(v.alerts()) << v.summary;
+  }
+}
+
+TEST(Verdict, ARepeatWithinItsUncertaintiesIsExplainedAtTheStatedRate) {
+  // p ≥ kConsistent fails for 0.1 % of honest scans: none of 40 here.
+  int unexplained = 0;
+  for (std::uint64_t seed = 100; seed < 140; ++seed) {
+    const auto v = judge(spectral({0, 0, 0}, seed));
+    unexplained += v.explained ? 0 : 1;
+    EXPECT_FALSE(v.alerts()) << v.summary;
+    EXPECT_NE(v.cause ? v.cause->parameter : "", "position_repeatability_deg") << v.summary;
+  }
+  EXPECT_EQ(unexplained, 0);
 }
 
 TEST(SpecParameters, ScalarsAndSpectralNodesWithTheirPlaceInTheText) {
