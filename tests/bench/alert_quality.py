@@ -2,18 +2,33 @@
 """Alert quality of goniod's divergence verdicts on the mock instrument.
 
 Runs many seeded mock scans per scenario, each against a real goniod (its own state
-directory and mock lab, the hidden truth drawn per scan), and reports per scenario how often
-the sustained divergence alert fired and whether the verdict named the true cause:
+directory and mock lab, the hidden truth drawn per scan), and reports per scenario how often a
+sustained divergence alert still stood when the scan ended (alerts the final verdict resolved
+are counted apart), and whether the verdict named the true cause:
 
   in spec         the sample is what the catalogue says, the instrument within its data
                   sheet (arm offsets drawn within ±0.45°, repeatability ±0.05°, the
-                  white's gain within its certificate): every alert is a false alarm
-  out of tolerance  the sample differs by about twice its tolerance or more: roughness
-                  +10 %, one albedo band +4 % (tolerance 2 %), a coat's IOR 1.5 -> 1.6
-  out of spec     the instrument is outside its data sheet: receive arm 1.5° off, the
+                  white's gain within its certificate): every standing alert is a false alarm
+  sample          the sample differs by about twice its tolerance or more
+  instrument      the instrument is outside its data sheet: receive arm 1.5° off, the
                   reference white's gain 5 % off
+  hint            random arm scatter beyond the stated repeatability: no alarm, but the
+                  verdict should name position_repeatability_deg as a calibration hint
 
-Usage: tests/bench/alert_quality.py --bin build/release/bin [--scans 20] [--json]
+Synthetic scenarios judge twin-made samples against their own formula. Real-sample scenarios
+("real: …") use a measured table as the mock's hidden sample (../shared/data/real, or --real)
+and, as a lab does, a master: a first scan of it made into the catalogue (sample.create
+reference.scan, or reference.model: a model fitted to it with its misfit as u); the repeat is
+scanned on the master's grid or between its points, by the same instrument (goniod restarted
+on the same state directory when the sample has changed). "coated real" is a truth built
+here: the measured table under a clear coat (the table plus a coat lobe). Changes there are
+about 3x the tolerance (2 %).
+
+A cause counts as right when the verdict names it; "tie" counts verdicts that name none but
+list the true cause among the candidates the points cannot tell apart (a uniform scale of β
+and a white's gain are one to the data); "unexplained" expects no cause and explained false.
+
+Usage: tests/bench/alert_quality.py --bin build/release/bin [--scans 20] [--only TEXT] [--json]
 """
 import argparse
 import json
@@ -26,32 +41,77 @@ import sys
 import tempfile
 import time
 
+HERE = os.path.dirname(os.path.abspath(__file__))
+REAL = os.path.normpath(os.path.join(HERE, "..", "..", "..", "shared", "data", "real",
+                                     "radiant-imaging-sphere-brdf.bsdf"))
+
 GLOSSY = "conductor:alpha=0.05,eta=0.2,k=3.9"
 PAINT = "lambert:albedo=400:0.06,500:0.12,600:0.45,700:0.55"
 COATED = "lambert:albedo=400:0.06,500:0.12,600:0.45,700:0.55+coat:alpha=0.2,ior=1.5"
 GLOSSY_GRID = "in=45;out=15:75:1"
 MATTE_GRID = "in=45;out=-30:70:2"
 COATED_GRID = "in=30;out=-15:75:2"
+# The measured table covers θi 15–75°; a master on a 4° grid, repeats on it and between.
+MASTER_GRID = "in=45;out=-30:70:4"
+BETWEEN_GRID = "in=45;out=-28:68:4"
+REAL_WL = "450:650:100"  # the table is monochrome: three channels, one per verdict band
+PLASTIC = "plastic:albedo=?,alpha=?,ior=1.52"
 
-# name, class, catalogued spec, hidden true spec, grid, lab keys (a function of the rng),
-# the parameter the verdict should name (None: no alert expected)
+# {real} stands for "@" + the measured table.
+R = "{real}"
+RC = "{real}+coat:alpha=0.15,ior=1.5"
+BRIGHTER = "+lambert:albedo=0.01"                                  # +6 % of the diffuse β
+RED = "+lambert:albedo=400:0,550:0,600:0.012,700:0.012"            # +7 % at 650 nm alone
+
+
+def sc(name, cls, hidden, grid, expected, catalogue=None, master=None, model=None, lab="offsets",
+       wavelengths=None):
+    """catalogue: a formula; master: the truth the master scan saw (then catalogue by reference)."""
+    return dict(name=name, cls=cls, hidden=hidden, grid=grid, expected=expected, catalogue=catalogue,
+                master=master, model=model, lab=lab, wavelengths=wavelengths)
+
+
 SCENARIOS = [
-    ("in spec, glossy", "in_spec", GLOSSY, GLOSSY, GLOSSY_GRID, "offsets", None),
-    ("in spec, matte paint", "in_spec", PAINT, PAINT, MATTE_GRID, "offsets", None),
-    ("roughness +10 %", "sample", GLOSSY, "conductor:alpha=0.055,eta=0.2,k=3.9", GLOSSY_GRID, "none",
-     "conductor.alpha"),
-    ("albedo band +4 % (2x tolerance)", "sample", PAINT,
-     "lambert:albedo=400:0.06,500:0.12,600:0.468,700:0.55", MATTE_GRID, "none", "lambert.albedo@600"),
-    ("coat IOR 1.5 -> 1.6", "sample", COATED, COATED.replace("ior=1.5", "ior=1.6"), COATED_GRID, "none",
-     "coat.ior"),
-    ("receive arm 1.5 deg off", "instrument", GLOSSY, GLOSSY, GLOSSY_GRID, "receive=1.5", "receive_arm_deg"),
-    ("white gain 5 % off", "instrument", PAINT, PAINT, MATTE_GRID, "gain=1.05", "gain"),
+    sc("in spec, glossy", "in_spec", GLOSSY, GLOSSY_GRID, None, catalogue=GLOSSY),
+    sc("in spec, matte paint", "in_spec", PAINT, MATTE_GRID, None, catalogue=PAINT),
+    sc("roughness +10 %", "sample", "conductor:alpha=0.055,eta=0.2,k=3.9", GLOSSY_GRID, "conductor.alpha",
+       catalogue=GLOSSY, lab="none"),
+    sc("albedo node +4 % (2x tolerance)", "sample", "lambert:albedo=400:0.06,500:0.12,600:0.468,700:0.55",
+       MATTE_GRID, "lambert.albedo@600", catalogue=PAINT, lab="none"),
+    sc("red band 600-700 +4 %", "sample", "lambert:albedo=400:0.06,500:0.12,600:0.468,700:0.572", MATTE_GRID,
+       "lambert.albedo@600-700", catalogue=PAINT, lab="none"),
+    sc("coat IOR 1.5 -> 1.6", "sample", COATED.replace("ior=1.5", "ior=1.6"), COATED_GRID, "coat.ior",
+       catalogue=COATED, lab="none"),
+    sc("other material (metal as paint)", "sample", GLOSSY, GLOSSY_GRID, "unexplained",
+       catalogue="lambert:albedo=0.4+coat:alpha=0.08,ior=1.5", lab="none"),
+    sc("receive arm 1.5 deg off", "instrument", GLOSSY, GLOSSY_GRID, "receive_arm_deg", catalogue=GLOSSY,
+       lab="receive=1.5"),
+    sc("white gain 5 % off", "instrument", PAINT, MATTE_GRID, "gain", catalogue=PAINT, lab="gain=1.05"),
+    sc("arm scatter 0.2 deg (paint)", "hint", COATED, COATED_GRID, "position_repeatability_deg",
+       catalogue=COATED, lab="scatter=0.2"),
+    # Real samples against a master.
+    sc("real: master, repeat on its grid", "in_spec", R, MASTER_GRID, None, master=R, wavelengths=REAL_WL),
+    sc("real: master, between its points", "in_spec", R, BETWEEN_GRID, None, master=R, wavelengths=REAL_WL),
+    sc("real: fitted model, between", "in_spec", R, BETWEEN_GRID, None, master=R, model=PLASTIC,
+       wavelengths=REAL_WL),
+    sc("coated real: master, between", "in_spec", RC, BETWEEN_GRID, None, master=RC, wavelengths=REAL_WL),
+    sc("real: 6 % brighter", "sample", R + BRIGHTER, BETWEEN_GRID, "catalogue@450-650", master=R,
+       wavelengths=REAL_WL),
+    sc("real: red channel +7 %", "sample", R + RED, BETWEEN_GRID, "catalogue@650-650", master=R,
+       wavelengths=REAL_WL),
+    sc("real: fitted model, 6 % brighter", "sample", R + BRIGHTER, BETWEEN_GRID, "plastic.albedo", master=R,
+       model=PLASTIC, wavelengths=REAL_WL),
+    sc("coated real: coat roughness +20 %", "sample", RC.replace("alpha=0.15", "alpha=0.18"), BETWEEN_GRID,
+       None, master=RC, wavelengths=REAL_WL),
+    sc("coated real: arm scatter 0.2 deg", "hint", RC, BETWEEN_GRID, "position_repeatability_deg", master=RC,
+       lab="scatter=0.2", wavelengths=REAL_WL),
 ]
 
 
 def lab_keys(kind, rng):
-    keys = ["full_scale_counts = 1e12", "position_repeatability_deg = 0.05", f"seed = {rng.randrange(1, 1 << 30)}"]
-    if kind == "offsets":
+    rep = kind.split("=")[1] if kind.startswith("scatter=") else "0.05"
+    keys = ["full_scale_counts = 1e12", f"position_repeatability_deg = {rep}"]
+    if kind in ("offsets", ) or kind.startswith("scatter="):
         keys.append("arm_offsets_deg = {{ incidence = {:.3f}, receive = {:.3f} }}".format(
             rng.uniform(-0.45, 0.45), rng.uniform(-0.45, 0.45)))
         # the white's true value within its certificate (u = 0.3 % from 500 nm)
@@ -85,53 +145,101 @@ class Conn:
                 return reply["result"]
 
 
-def run_scan(binary, scenario, rng, wavelengths):
-    name, cls, catalogued, hidden, grid, lab, expected = scenario
-    with tempfile.TemporaryDirectory(prefix="gonio-alerts-") as state:
+class Goniod:
+    """A goniod on the mock in `state`, its hidden sample `hidden`; the lab's keys fixed."""
+
+    def __init__(self, binary, state, hidden, lab, seed):
+        self.state = state
         config = os.path.join(state, "goniod.toml")
         with open(config, "w") as f:
             f.write('[server]\nlisten = []\n\n[instrument.motion]\ndriver = "mock"\n'
-                    f'sample = "{hidden}"\ntime_scale = 0\n{lab_keys(lab, rng)}\n\n'
+                    f'sample = "{hidden}"\ntime_scale = 0\n{lab}\nseed = {seed}\n\n'
                     '[instrument.photometer]\ndriver = "mock"\n')
-        log = open(os.path.join(state, "goniod.log"), "w")
-        proc = subprocess.Popen([os.path.join(binary, "goniod"), "--state-dir", state, "--config", config],
-                                stdout=log, stderr=log)
+        self.log = open(os.path.join(state, "goniod.log"), "a")
+        self.proc = subprocess.Popen([os.path.join(binary, "goniod"), "--state-dir", state, "--config", config],
+                                     stdout=self.log, stderr=self.log)
+        sock = os.path.join(state, "goniod.sock")
+        for _ in range(400):
+            if os.path.exists(sock):
+                try:
+                    self.conn = Conn(sock)
+                    self.conn.call("system.info")
+                    return
+                except (OSError, RuntimeError, ValueError):
+                    pass
+            time.sleep(0.05)
+        self.close()
+        raise RuntimeError("goniod did not start: " + open(os.path.join(state, "goniod.log")).read())
+
+    def call(self, method, params=None):
+        return self.conn.call(method, params)
+
+    def scan(self, sample, grid, wavelengths):
+        scan = self.call("scan.submit", {"sample": sample, "grids": [grid], "wavelengths": wavelengths})["id"]
+        while True:
+            st = self.call("scan.get", {"scan": scan})
+            if st["state"] in ("completed", "failed", "cancelled", "paused"):
+                return st
+            time.sleep(0.1)
+
+    def close(self):
+        # goniod commits every point as it goes; a restart on the same state keeps it all.
+        self.proc.send_signal(signal.SIGTERM)
         try:
-            sock = os.path.join(state, "goniod.sock")
-            for _ in range(200):
-                if os.path.exists(sock):
-                    try:
-                        c = Conn(sock)
-                        c.call("system.info")
-                        break
-                    except (OSError, RuntimeError, ValueError):
-                        pass
-                time.sleep(0.05)
+            self.proc.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+        self.log.close()
+
+
+def score(expected, verdict):
+    """right: the cause named; tie: no cause, the truth among those the points cannot tell apart."""
+    cause = (verdict.get("cause") or {}).get("parameter")
+    if expected == "unexplained":
+        return cause is None and verdict.get("explained") is False, False
+    alike = [a.get("parameter") for a in verdict.get("alike") or []]
+    return expected is not None and cause == expected, cause is None and expected in alike
+
+
+def run_scan(binary, scenario, rng, wavelengths, real):
+    wl = scenario["wavelengths"] or wavelengths
+    fill = lambda spec: spec.replace("{real}", "@" + real)
+    lab = lab_keys(scenario["lab"], rng)
+    with tempfile.TemporaryDirectory(prefix="gonio-alerts-") as state:
+        t0 = time.time()
+        first = fill(scenario["master"] or scenario["hidden"])
+        g = Goniod(binary, state, first, lab, rng.randrange(1, 1 << 30))
+        try:
+            if scenario["master"]:
+                g.call("sample.create", {"name": "master"})  # no catalogue: its scan is the master
+                m = g.scan("master", MASTER_GRID, wl)
+                if m["state"] != "completed":
+                    raise RuntimeError(f"master scan {m['state']}")
+                ref = {"scan": m["id"]}
+                if scenario["model"]:
+                    ref["model"] = scenario["model"]
+                g.call("sample.create", {"name": "s", "reference": ref, "tolerance": 0.02})
+                if scenario["hidden"] != scenario["master"]:
+                    g.close()  # the production sample: the same instrument, another piece
+                    g = Goniod(binary, state, fill(scenario["hidden"]), lab, rng.randrange(1, 1 << 30))
             else:
-                raise RuntimeError("goniod did not start: " + open(os.path.join(state, "goniod.log")).read())
-            c.call("sample.create", {"name": "s", "bsdf": catalogued, "tolerance": 0.02})
-            scan = c.call("scan.submit", {"sample": "s", "grids": [grid], "wavelengths": wavelengths})["id"]
-            t0 = time.time()
-            while True:
-                st = c.call("scan.get", {"scan": scan})
-                if st["state"] in ("completed", "failed", "cancelled", "paused"):
-                    break
-                time.sleep(0.1)
-            seconds = time.time() - t0
-            alerts = c.call("alert.list", {"scan": scan})
-            sustained = [a for a in alerts if a["kind"] == "sustained_divergence"]
-            verdict = st.get("verdict") or {}
-            cause = (verdict.get("cause") or {}).get("parameter")
-            return {"scenario": name, "class": cls, "state": st["state"], "points": st["points_done"],
-                    "diverged_points": st["points_diverged"], "alert": bool(sustained),
-                    "decision": verdict.get("decision"), "cause": cause, "expected": expected,
-                    "correct": expected is not None and cause == expected, "seconds": seconds,
-                    "summary": verdict.get("summary", ""),
-                    "alert_message": sustained[0]["message"] if sustained else None}
+                g.call("sample.create", {"name": "s", "bsdf": scenario["catalogue"], "tolerance": 0.02})
+            st = g.scan("s", scenario["grid"], wl)
+            alerts = [a for a in g.call("alert.list", {"scan": st["id"]}) if a["kind"] == "sustained_divergence"]
         finally:
-            proc.send_signal(signal.SIGKILL)
-            proc.wait()
-            log.close()
+            g.close()
+        standing = [a for a in alerts if not a.get("resolved_at")]
+        verdict = st.get("verdict") or {}
+        right, tie = score(scenario["expected"], verdict)
+        return {"scenario": scenario["name"], "class": scenario["cls"], "state": st["state"],
+                "points": st["points_done"], "diverged_points": st["points_diverged"], "alert": bool(standing),
+                "resolved": len(alerts) - len(standing), "decision": verdict.get("decision"),
+                "cause": (verdict.get("cause") or {}).get("parameter"),
+                "hint": (verdict.get("calibration_hint") or {}).get("parameter"),
+                "expected": scenario["expected"], "right": right, "tie": tie, "seconds": time.time() - t0,
+                "summary": verdict.get("summary", ""),
+                "alert_message": standing[0]["message"] if standing else None}
 
 
 def main():
@@ -139,44 +247,59 @@ def main():
     ap.add_argument("--bin", required=True, help="directory of goniod")
     ap.add_argument("--scans", type=int, default=20, help="seeded scans per scenario")
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--wavelengths", default="400:700:10")
+    ap.add_argument("--wavelengths", default="400:700:10", help="of the synthetic scenarios")
+    ap.add_argument("--real", default=REAL, help="the measured table (IS-SA .bsdf)")
     ap.add_argument("--only", default="", help="run the scenarios whose name contains this")
     ap.add_argument("--json", action="store_true", help="every scan's result as JSON lines")
     a = ap.parse_args()
+    if not os.path.exists(a.real):
+        sys.exit(f"--real: no measured table at {a.real}")
     rng = random.Random(a.seed)
     rows = []
-    for sc in SCENARIOS:
-        if a.only and a.only not in sc[0]:
+    for scenario in SCENARIOS:
+        if a.only and a.only not in scenario["name"]:
             continue
-        results = [run_scan(a.bin, sc, rng, a.wavelengths) for _ in range(a.scans)]
+        results = [run_scan(a.bin, scenario, rng, a.wavelengths, a.real) for _ in range(a.scans)]
         if a.json:
             for r in results:
-                print(json.dumps(r))
-        n = len(results)
-        alerts = sum(r["alert"] for r in results)
-        correct = sum(r["correct"] for r in results if r["alert"])
+                print(json.dumps(r), flush=True)
+        rows.append((scenario, results))
+        n, alerts = len(results), sum(r["alert"] for r in results)
+        sys.stderr.write(f"{scenario['name']}: {alerts}/{n} alerts\n")
+    print(f"{'scenario':36} {'class':10} {'scans':>5} {'alerts':>6} {'rate':>5} {'resolved':>8} "
+          f"{'right':>6} {'tie':>4}  verdicts")
+    for scenario, results in rows:
+        n, alerts = len(results), sum(r["alert"] for r in results)
+        resolved = sum(r["resolved"] > 0 for r in results)
+        if scenario["cls"] == "hint":  # named whether or not anything alerted
+            right, tie = sum(r["right"] or r["hint"] == scenario["expected"] for r in results), 0
+        else:
+            right = sum(r["right"] for r in results if r["alert"])
+            tie = sum(r["tie"] for r in results if r["alert"])
+        judged = scenario["expected"] is not None
         decisions = {}
         for r in results:
             decisions[r["decision"]] = decisions.get(r["decision"], 0) + 1
-        rows.append((sc[0], sc[1], n, alerts, correct, decisions,
-                     sum(r["seconds"] for r in results) / n))
-        sys.stderr.write(f"{sc[0]}: {alerts}/{n} alerts, {correct} correct causes\n")
-    print(f"{'scenario':34} {'class':10} {'scans':>5} {'alerts':>7} {'rate':>6} {'correct':>8}  verdicts")
-    for name, cls, n, alerts, correct, decisions, secs in rows:
-        rate = alerts / n
-        corr = f"{correct}/{alerts}" if cls != "in_spec" else "-"
-        print(f"{name:34} {cls:10} {n:5d} {alerts:7d} {100 * rate:5.0f}% {corr:>8}  "
+        secs = sum(r["seconds"] for r in results) / n
+        print(f"{scenario['name']:36} {scenario['cls']:10} {n:5d} {alerts:6d} {100 * alerts / n:4.0f}% {resolved:8d} "
+              f"{(str(right) if judged else '-'):>6} {(str(tie) if judged else '-'):>4}  "
               + ", ".join(f"{k}: {v}" for k, v in sorted(decisions.items(), key=lambda kv: str(kv[0])))
               + f"  ({secs:.1f} s/scan)")
-    fa = [r for r in rows if r[1] == "in_spec"]
-    det = [r for r in rows if r[1] != "in_spec"]
-    if fa:
-        print(f"false-alarm rate (in spec): {100 * sum(r[3] for r in fa) / sum(r[2] for r in fa):.1f} %")
-    if det:
-        detected = sum(r[3] for r in det)
-        print(f"detection rate (out of tolerance or spec): {100 * detected / sum(r[2] for r in det):.1f} %")
-        if detected:
-            print(f"correct diagnoses among detected: {100 * sum(r[4] for r in det) / detected:.1f} %")
+    for label, real in (("synthetic", False), ("real samples", True)):
+        group = [(s, r) for s, r in rows if s["name"].startswith(("real", "coated real")) == real]
+        quiet = [x for s, rs in group if s["cls"] in ("in_spec", "hint") for x in rs]
+        loud = [x for s, rs in group if s["cls"] in ("sample", "instrument") for x in rs]
+        if quiet:
+            print(f"{label}: false alarms {sum(x['alert'] for x in quiet)}/{len(quiet)} "
+                  f"({100 * sum(x['alert'] for x in quiet) / len(quiet):.1f} %)", end="")
+        if loud:
+            detected = [x for x in loud if x["alert"]]
+            print(f"; detected {len(detected)}/{len(loud)} ({100 * len(detected) / len(loud):.1f} %)", end="")
+            judged = [x for x in detected if x["expected"] is not None]
+            if judged:
+                print(f"; cause right {sum(x['right'] for x in judged)}/{len(judged)}, "
+                      f"or among a tie {sum(x['tie'] for x in judged)}", end="")
+        print()
 
 
 if __name__ == "__main__":
