@@ -1,5 +1,6 @@
 #include "gonio/proto/text.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 
@@ -114,6 +115,77 @@ std::string format_value_list(const std::vector<double>& values) {
     ++i;
   }
   return out;
+}
+
+std::string format_measured(double value, double u) {
+  if (!std::isfinite(value)) return fmt::format("{}", value);
+  if (!(u > 0) || !std::isfinite(u)) return fmt::format("{:.6g}", value);
+  // The decimal place of u's second significant digit, after rounding (9.96 → 10).
+  int place = static_cast<int>(std::floor(std::log10(u))) - 1;
+  if (std::round(u / std::pow(10.0, place)) >= 100) ++place;
+  const int value_exp = value == 0 ? place + 1 : static_cast<int>(std::floor(std::log10(std::abs(value))));
+  if (place >= -6 && value_exp < 7) {
+    if (place >= 0) {  // an integer: round both to that place
+      const double scale = std::pow(10.0, place);
+      return fmt::format("{:.0f} ± {:.0f}", std::round(value / scale) * scale, std::round(u / scale) * scale);
+    }
+    return fmt::format("{:.{}f} ± {:.{}f}", value, -place, u, -place);
+  }
+  const int e = std::max(value_exp, place + 1);
+  const double scale = std::pow(10.0, e);
+  const int decimals = e - place;
+  return fmt::format("({:.{}f} ± {:.{}f})e{}", value / scale, decimals, u / scale, decimals, e);
+}
+
+namespace {
+
+// Optimal string alignment distance: insertions, deletions, substitutions and a swap of
+// neighbours ("mokc" → "mock") each cost one.
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  const std::size_t w = b.size() + 1;
+  std::vector<std::size_t> d((a.size() + 1) * w);
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i * w] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i)
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      auto& x = d[i * w + j];
+      x = std::min({d[(i - 1) * w + j] + 1, d[i * w + j - 1] + 1,
+                    d[(i - 1) * w + j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+        x = std::min(x, d[(i - 2) * w + j - 2] + 1);
+    }
+  return d.back();
+}
+
+}  // namespace
+
+std::vector<std::string> near_matches(std::string_view word, const std::vector<std::string>& candidates,
+                                      std::size_t max) {
+  // A typo: up to a third of the word's letters (at least one, at most three) edited.
+  const std::size_t limit = std::clamp<std::size_t>(word.size() / 3, 1, 3);
+  std::vector<std::pair<std::size_t, std::string>> scored;
+  for (const auto& c : candidates) {
+    if (c == word) continue;
+    std::size_t d = edit_distance(word, c);
+    if (word.size() >= 3 && c.starts_with(word)) d = std::min(d, limit);
+    if (d <= limit) scored.emplace_back(d, c);
+  }
+  std::stable_sort(scored.begin(), scored.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  std::vector<std::string> out;
+  for (auto& s : scored) {
+    if (out.size() >= max) break;
+    if (std::find(out.begin(), out.end(), s.second) == out.end()) out.push_back(std::move(s.second));
+  }
+  return out;
+}
+
+std::string did_you_mean(std::string_view word, const std::vector<std::string>& candidates) {
+  const auto near = near_matches(word, candidates);
+  if (near.empty()) return {};
+  std::string out = " (did you mean ";
+  for (std::size_t i = 0; i < near.size(); ++i)
+    out += fmt::format("{}'{}'", i == 0 ? "" : i + 1 == near.size() ? " or " : ", ", near[i]);
+  return out + "?)";
 }
 
 }  // namespace gonio::text

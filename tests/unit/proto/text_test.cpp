@@ -43,5 +43,27 @@ TEST(Text, FormatsListsCompactlyAndRoundTrips) {
   EXPECT_EQ(format_number(45), "45");
 }
 
+TEST(Text, RoundsAValueToItsUncertainty) {
+  // GUM §7.2.6: u to two significant digits, the value to the same decimal place.
+  EXPECT_EQ(format_measured(0.3454308, 0.0137220), "0.345 ± 0.014");
+  EXPECT_EQ(format_measured(-0.104204, 0.020922), "-0.104 ± 0.021");
+  EXPECT_EQ(format_measured(1.0, 0.0996), "1.00 ± 0.10");  // u rounds up to a new digit
+  EXPECT_EQ(format_measured(1234.5, 56.2), "1235 ± 56");
+  EXPECT_EQ(format_measured(123456, 5612), "123500 ± 5600");
+  // A tiny relative u keeps a readable exponent instead of nine decimals.
+  EXPECT_EQ(format_measured(0.02, 9.3e-07), "(2.000000 ± 0.000093)e-2");
+  EXPECT_EQ(format_measured(0.5, 0), "0.5");
+}
+
+TEST(Text, SuggestsNearMatches) {
+  const std::vector<std::string> drivers{"modbus", "mock", "scpi-serial", "scpi-tcp", "scpi-usbtmc"};
+  EXPECT_EQ(near_matches("mokc", drivers), std::vector<std::string>{"mock"});
+  EXPECT_EQ(did_you_mean("mokc", drivers), " (did you mean 'mock'?)");
+  EXPECT_EQ(did_you_mean("scpi-tpc", drivers), " (did you mean 'scpi-tcp'?)");
+  EXPECT_EQ(did_you_mean("scpi", drivers), " (did you mean 'scpi-serial', 'scpi-tcp' or 'scpi-usbtmc'?)");
+  EXPECT_EQ(did_you_mean("xyz", drivers), "");
+  EXPECT_EQ(did_you_mean("mock", drivers), "");
+}
+
 }  // namespace
 }  // namespace gonio::text

@@ -30,4 +30,17 @@ std::string format_value_list(const std::vector<double>& values);
 // Shortest decimal text that reads back as the same double ("45", "0.05", "-80").
 std::string format_number(double v);
 
+// A value with its standard uncertainty, rounded as GUM §7.2.6 asks: u to two significant
+// digits, the value to the same decimal place ("0.3454 ± 0.0137" → "0.345 ± 0.014"). Very
+// small or large decimal places use a common exponent: "(2.000000 ± 0.000093)e-2". A u
+// that is not positive and finite leaves the value with 6 significant digits, alone.
+std::string format_measured(double value, double u);
+
+// The candidates closest to `word` by edit distance (a typo or two, or a prefix), best
+// first, at most `max` of them: for "did you mean ..." in errors about unknown names.
+std::vector<std::string> near_matches(std::string_view word, const std::vector<std::string>& candidates,
+                                      std::size_t max = 3);
+// " (did you mean 'mock'?)", " (did you mean 'a' or 'b'?)", or "" when nothing is near.
+std::string did_you_mean(std::string_view word, const std::vector<std::string>& candidates);
+
 }  // namespace gonio::text
