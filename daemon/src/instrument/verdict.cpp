@@ -181,7 +181,7 @@ void ScanEvidence::setup(const PointRecord& p) {
   residual_ = e++;
   E_ = e;
   G_.assign(e * e, 0.0);
-  Zq_ = Zs_ = Lag_ = G_;
+  Zw_ = Zs_ = Lag_ = G_;
   const std::size_t bands = std::min<std::size_t>(3, channels_);
   bands_.assign(bands, Moments{0, 0, std::vector<double>(n, 0.0), std::vector<double>(n, 0.0),
                                std::vector<double>(n, 0.0)});
@@ -248,15 +248,21 @@ ScanEvidence::Region& ScanEvidence::region_of(const Geometry& g) {
 
 void ScanEvidence::add_scatter_terms(std::vector<double> a, double q) {
   for (auto& x : a) x /= std::sqrt(q);
+  // Each point weighs q/(1 + σ0²q)², the inverse of var z² = 2(1 + σ²q)² at σ² = σ0², a
+  // scatter of twice the stated repeatability: weights ∝ q alone would let the few points on a
+  // steep flank, whose z² is the noisiest, decide the estimate.
+  const double s0 = 4 * std::max(repeatability_u_ * repeatability_u_, kMinScatterVar);
+  const double w = q / ((1 + s0 * q) * (1 + s0 * q));
   const auto A = view(a);
-  view(Zq_, E_).noalias() += q * A * A.transpose();
+  view(Zw_, E_).noalias() += w * A * A.transpose();
   view(Zs_, E_).noalias() += A * A.transpose();
   if (previous_a_.size() == a.size()) view(Lag_, E_).noalias() += A * view(previous_a_).transpose();
   previous_a_ = std::move(a);
-  sum_q_ += q;
-  sum_q2_ += q * q;
-  sum_q3_ += q * q * q;
-  sum_q4_ += q * q * q * q;
+  sum_w_ += w;
+  sum_wq_ += w * q;
+  sum_w2_ += w * w;
+  sum_w2q_ += w * w * q;
+  sum_w2q2_ += w * w * q * q;
 }
 
 void ScanEvidence::add(const PointRecord& rec) {
@@ -613,19 +619,31 @@ std::vector<MisfitRegion> ScanEvidence::regions_of(const Fit& fit) const {
 }
 
 // The extra variance of random arm scatter, by moments of the residuals projected on the
-// arms' sensitivity: E[z²] = 1 + σ²q per point, so σ² = Σ q (z² − 1) / Σ q² (weights ∝ q²/var
-// with var z² ≈ 2 at σ² = 0), u(σ²)² = 2 Σ q² (1 + σ²q)² / (Σ q²)².
+// arms' sensitivity: E[z²] = 1 + σ²q per point, so with weights w (add_scatter_terms)
+// σ² = Σ w (z² − 1) / Σ w q, unbiased for any w, and u(σ²)² = 2 Σ w² (1 + σ²q)² / (Σ w q)².
 ScanEvidence::Scatter ScanEvidence::scatter_of(const Fit& fit) const {
   Scatter s;
-  if (!(sum_q2_ > 0) || points_ < 3) return s;
+  if (!(sum_wq_ > 0) || points_ < 3) return s;
   const auto beta = coefficients(fit.index, fit.theta);
-  s.extra_var = (form(Zq_, E_, beta) - sum_q_) / sum_q2_;
+  s.extra_var = (form(Zw_, E_, beta) - sum_w_) / sum_wq_;
   const double v = s.extra_var;
-  s.u_extra_var = std::sqrt(2 * std::max(0.0, sum_q2_ + 2 * v * sum_q3_ + v * v * sum_q4_)) / sum_q2_;
+  s.u_extra_var = std::sqrt(2 * std::max(0.0, sum_w2_ + 2 * v * sum_w2q_ + v * v * sum_w2q2_)) / sum_wq_;
   const double zz = form(Zs_, E_, beta);
   s.rho = zz > 0 ? form(Lag_, E_, beta) / zz : 0.0;  // bᵀLb = bᵀ(L + Lᵀ)b/2
   s.named = s.u_extra_var > 0 && s.extra_var > kScatterZ * s.u_extra_var && s.rho < kScatterRho;
   return s;
+}
+
+// The χ² the Taylor remainder of a candidate's fitted change may leave: kTruncation² times the
+// χ² of its own effect (Σ (ε·effect)²/var, a quadratic form in G like every χ² here).
+double ScanEvidence::truncation_chi2(const Fitted& c) const {
+  const auto& col = names_[c.column];
+  if (col.band() || col.name == "gain") return 0.0;
+  const auto pos =
+      static_cast<std::size_t>(std::find(c.fit.index.begin(), c.fit.index.end(), c.column) - c.fit.index.begin());
+  auto effect = coefficients({c.column}, {c.fit.theta[pos]});
+  effect[residual_] = 0;
+  return kTruncation * kTruncation * form(G_, E_, effect);
 }
 
 // The effect of a sample parameter's fitted change on β, judged point by point. At a channel
@@ -786,7 +804,7 @@ ScanVerdict ScanEvidence::verdict() const {
   }
   const auto& best = cands.front();
   v.delta_chi2_next = cands.size() > 1 ? cands[1].fit.chi2 - best.fit.chi2 : 0;
-  const double best_p = chi2_p_value(best.fit.chi2, dof(1));
+  const double best_p = chi2_p_value(std::max(0.0, best.fit.chi2 - truncation_chi2(best)), dof(1));
   if (best_p < kConsistent) {
     // The best candidate improves on H0 but does not explain what is left: naming it would
     // blame one parameter for a misfit it does not account for.

@@ -109,11 +109,17 @@ class ScanEvidence {
   static constexpr double kTie = 9.0;
   // A fit explains the residuals when P(χ² ≥ observed | its dof) is at least this (≈ 3.1σ).
   static constexpr double kConsistent = 1e-3;
+  // The twin's model of a candidate is its Taylor series at the catalogue (slope, and
+  // curvature for the arms): a change as large as the fitted one leaves that series' remainder
+  // in the residuals. The consistency test allows up to this fraction of the candidate's own
+  // effect, point by point, as that remainder; a scale (a band, the white's gain) is exact.
+  static constexpr double kTruncation = 0.1;
   // Random scatter is named when its extra variance stands 5σ above zero and the residuals
   // along the arms' sensitivity are not correlated from point to point (lag-1 ρ below this):
   // a systematic misfit is smooth over neighbouring points, scatter is not.
   static constexpr double kScatterZ = 5.0;
   static constexpr double kScatterRho = 0.5;
+  static constexpr double kMinScatterVar = 0.0025;  // deg²: σ0 when no repeatability is stated
   static constexpr double kRegionDeg = 10.0;
 
   ScanEvidence(double tolerance, double coverage_k) : tolerance_(tolerance), k_(coverage_k) {}
@@ -195,6 +201,7 @@ class ScanEvidence {
   MeanResult band_decision(const Fit& fit) const;
   std::vector<MisfitRegion> regions_of(const Fit& fit) const;
   Scatter scatter_of(const Fit& fit) const;
+  double truncation_chi2(const Fitted& c) const;
   Decision effect_decision(const Fitted& c, std::size_t& out_points) const;
   std::string decide_for(const Fitted& c, std::string& text) const;
   std::string tolerance_text() const;
@@ -228,12 +235,13 @@ class ScanEvidence {
   std::vector<Moments> bands_;
   std::vector<std::size_t> band_of_;       // each channel's band
   std::vector<Region> regions_;
-  // Scatter: per point the residual projected on the arms' sensitivity g (weights w),
-  // z = aᵀβ' with a = Σ g w e / √q and q = Σ g² w; var z = 1 + σ²q under extra scatter σ².
-  // Σ q a aᵀ, Σ a aᵀ, Σ a_i a_{i−1}ᵀ and Σ q, Σ q² are what the estimate needs.
-  std::vector<double> Zq_, Zs_, Lag_;  // E × E
+  // Scatter: per point the residual projected on the arms' sensitivity g (weights 1/var),
+  // z = aᵀβ' with a = Σ g e / (var √q) and q = Σ g²/var; var z = 1 + σ²q under extra
+  // scatter σ². With each point's weight w (add_scatter_terms), Σ w a aᵀ, Σ a aᵀ,
+  // Σ a_i a_{i−1}ᵀ and Σ w, Σ w q, Σ w², Σ w² q, Σ w² q² are what the estimate needs.
+  std::vector<double> Zw_, Zs_, Lag_;  // E × E
   std::vector<double> previous_a_;
-  double sum_q_ = 0, sum_q2_ = 0, sum_q3_ = 0, sum_q4_ = 0;
+  double sum_w_ = 0, sum_wq_ = 0, sum_w2_ = 0, sum_w2q_ = 0, sum_w2q2_ = 0;
   double repeatability_u_ = 0;  // the profile's stated repeatability (standard uncertainty)
   std::size_t n_ = 0;
 };
