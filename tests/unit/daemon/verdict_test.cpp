@@ -137,6 +137,29 @@ TEST(Verdict, AnArmOffsetBeyondTheDatasheetIsTheInstrument) {
   EXPECT_NEAR(g.cause->value, 1.05, 0.005);
 }
 
+// The twin's model of an arm is its slope (and curvature) at the catalogue; a real 1.5° shift
+// across a lobe bends away from that. A remainder of a few percent of the arm's own effect
+// is the series' truncation, and the cause stands; one of a third of it is not.
+TEST(Verdict, ALargeArmOffsetIsNamedDespiteItsTaylorRemainderButNotBeyondIt) {
+  const auto with_remainder = [](double fraction) {
+    auto points = scan({.receive_offset = 1.5}, 61, 5);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const double x = -2 + 4.0 * static_cast<double>(i) / 60;
+      const auto& slope = points[i].budget[1].sensitivity;  // receive_arm_deg
+      for (std::size_t c = 0; c < 3; ++c) points[i].measured.values[c] += fraction * x / 2 * slope[c] * 1.5;
+    }
+    return judge(points);
+  };
+  const auto near = with_remainder(0.05);
+  ASSERT_TRUE(near.cause.has_value()) << near.summary;
+  EXPECT_EQ(near.cause->parameter, "receive_arm_deg");
+  EXPECT_EQ(near.decision, "instrument_out_of_spec") << near.summary;
+  EXPECT_TRUE(near.explained);
+  const auto far = with_remainder(0.6);
+  EXPECT_FALSE(far.cause.has_value()) << far.summary;
+  EXPECT_FALSE(far.explained) << far.summary;
+}
+
 TEST(Verdict, NeverFromTheFirstPointsAlone) {
   // Five candidate causes (two arms, the white, two sample parameters; the apertures are
   // nuisance inputs): 10 points before a cause is named, however clear the first are; fewer
