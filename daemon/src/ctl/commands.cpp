@@ -119,3 +119,4 @@ int gonioctl_main(int argc, char** argv) {
 }
 
 }  // namespace gonio::daemon
+  ctl::add_backup_commands(app, ctx);

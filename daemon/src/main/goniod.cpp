@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include "gonio/daemon/startup/daemon.hpp"
+#include "gonio/daemon/startup/restore.hpp"
 #include "gonio/proto/version.hpp"
 
 int main(int argc, char** argv) {
@@ -20,9 +21,14 @@ int main(int argc, char** argv) {
                                    "and exit (0: valid, 2: not)")
                         ->excludes("--config")
                         ->excludes(state_opt);
+  std::string restore_file;
+  auto* restore_opt = app.add_option("--restore", restore_file,
+                                     "make the backup FILE (gonioctl backup) the store of --state-dir, "
+                                     "which must be empty or absent, and exit")
+                          ->excludes(check_opt);
   app.add_option("--listen", o.listen,
-                 "unix:PATH, tcp://HOST:PORT or http://HOST:PORT (repeatable; replaces "
-                 "server.listen)");
+                 "unix:PATH, tcp://HOST:PORT, http://HOST:PORT, tls://HOST:PORT or "
+                 "https://HOST:PORT (repeatable; replaces server.listen)");
   app.add_flag("--mock", o.mock, "use the built-in twin-backed mock instrument");
   app.add_option("--log-level", o.log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
@@ -40,6 +46,7 @@ int main(int argc, char** argv) {
     std::cerr << "--state-dir is required\nRun with --help for more information.\n";
     return gonio::daemon::exit_code::usage;
   }
+  if (*restore_opt) return gonio::daemon::restore_state(restore_file, state_dir, std::cout, std::cerr);
   o.state_dir = state_dir;
   return gonio::daemon::run_daemon(o);
 }

@@ -18,6 +18,7 @@ void register_methods(rpc::Dispatcher& d, Services& s) {
   register_queue(reg, s);
   register_alert(reg, s);
   register_archive(reg, s);
+  register_backup(reg, s);
   register_twin(reg, s);
   register_subscribe(reg, s);
   reg.finish();

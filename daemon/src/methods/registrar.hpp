@@ -37,6 +37,7 @@ void register_material(MethodRegistrar& r, Services& s);    // scan.material
 void register_queue(MethodRegistrar& r, Services& s);       // queue.*
 void register_alert(MethodRegistrar& r, Services& s);       // alert.*
 void register_archive(MethodRegistrar& r, Services& s);     // archive.*
+void register_backup(MethodRegistrar& r, Services& s);      // backup.*
 void register_twin(MethodRegistrar& r, Services& s);        // twin.*
 void register_subscribe(MethodRegistrar& r, Services& s);   // subscribe, unsubscribe
 

@@ -38,6 +38,17 @@ constexpr std::size_t kEnvelopeRoom = 128;
 
 enum class Control { pause, resume, cancel };
 
+// A scan whose points retention pruned (store.retention_days) answers for them with
+// not_found saying so: an empty page would read as a scan that measured nothing.
+void refuse_pruned(const Store& store, std::int64_t id) {
+  if (const auto at = store.points_pruned_at(id))
+    throw Error(Errc::not_found,
+                fmt::format("scan {}'s points were pruned at {} (store.retention_days), after the central archive "
+                            "had committed every one of them: read them from the archive",
+                            id, *at),
+                "scan");
+}
+
 // scan.pause, scan.resume and scan.cancel: {scan, reason?} -> the scan's summary.
 rpc::Handler control(Services& s, Control what) {
   return [&s, what](rpc::Call& c) {
@@ -95,6 +106,8 @@ rpc::Result scan_get(Services& s, rpc::Call& c) {
   out["fits"] = std::move(fits);
   const auto verdict = s.store.latest_fit(id, "verdict");
   out["verdict"] = verdict ? verdict->result : json(nullptr);
+  const auto pruned = s.store.points_pruned_at(id);
+  out["points_pruned_at"] = pruned ? json(*pruned) : json(nullptr);
   // An adaptive scan's loop: live while it runs, else as stored when it last stopped.
   if (out["plan"].contains("adaptive")) {
     if (auto live = s.instrument.adaptive_status(id)) out["adaptive"] = std::move(*live);
@@ -141,6 +154,7 @@ rpc::Result scan_points(Services& s, rpc::Call& c) {
   const auto progress = s.store.scan_progress(id);
   if (!progress) throw Error::not_found("scan", fmt::format("scan {}", id));
   const auto texts = s.store.point_json(id, offset, limit);
+  if (texts.empty() && offset < progress->first) refuse_pruned(s.store, id);
   const auto next = offset + texts.size();
   std::string out = fmt::format(R"({{"scan":{},"offset":{},"points_done":{},"points_total":{},"next_offset":{},"points":[)",
                                 id, offset, progress->first, progress->second,
@@ -162,6 +176,7 @@ rpc::Result scan_export(Services& s, rpc::Call& c) {
                                                "json, bsdf, ssdd)",
                                                format));
   const auto scan = require_scan(s.store, id);
+  refuse_pruned(s.store, id);
   const std::size_t channels = std::max<std::size_t>(1, scan.plan.wavelengths.size());
   const bool table = format == "bsdf" || format == "ssdd";
   std::size_t offset = 0, limit = 0;

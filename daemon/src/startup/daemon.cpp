@@ -41,6 +41,7 @@
 #include "gonio/daemon/rpc/governor.hpp"
 #include "gonio/daemon/rpc/hub.hpp"
 #include "gonio/daemon/rpc/rpc.hpp"
+#include "gonio/daemon/store/retention.hpp"
 #include "gonio/daemon/store/store.hpp"
 
 #include "gonio/proto/json_util.hpp"
@@ -562,6 +563,8 @@ int run_daemon(const DaemonOptions& o) {
                       [&listeners](JsonWriter& w) {
                         for (const auto& l : listeners) {
                           w.begin_object();
+    RetentionKeeper retention(*store, config.retention_days, telemetry.archive != nullptr);
+    retention.start();
                           l->write_stats(w);
                           w.end_object();
                         }

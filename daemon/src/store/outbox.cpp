@@ -53,8 +53,14 @@ std::vector<OutboxRow> Store::outbox_batch(std::size_t limit, std::int64_t after
 
 void Store::outbox_remove(std::int64_t first_seq, std::int64_t last_seq) {
   std::lock_guard lock(write_mu_);
-  writer_->begin_write();
+  db::Transaction t(*writer_);
+  // The points among them are in the archive now: what retention may prune (retention.cpp).
+  db::execute(*writer_,
+              "INSERT OR IGNORE INTO archived_points(scan_id, idx) SELECT ref, idx FROM outbox "
+              "WHERE seq BETWEEN ? AND ? AND kind = 'point'",
+              first_seq, last_seq);
   db::execute(*writer_, "DELETE FROM outbox WHERE seq BETWEEN ? AND ?", first_seq, last_seq);
+  t.commit();
 }
 
 OutboxStats Store::outbox_stats() const {

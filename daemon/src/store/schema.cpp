@@ -125,6 +125,17 @@ ALTER TABLE alerts ADD COLUMN resolution TEXT;
 ALTER TABLE samples ADD COLUMN model_u REAL NOT NULL DEFAULT 0;
 ALTER TABLE samples ADD COLUMN catalogue TEXT;
 )sql",
+    // 6 -> 7: retention (store.retention_days, retention.cpp): the points the central archive
+    // has committed (their outbox rows left), and when a scan's points were pruned. The file
+    // also moves to auto_vacuum = INCREMENTAL, which takes a VACUUM outside any transaction:
+    // migrate() does that after this migration (and at any open that finds it not done).
+    R"sql(
+ALTER TABLE scans ADD COLUMN points_pruned_at TEXT;
+CREATE TABLE archived_points (
+  scan_id INTEGER NOT NULL,
+  idx INTEGER NOT NULL,
+  PRIMARY KEY (scan_id, idx)) WITHOUT ROWID;
+)sql",
 };
 static_assert(std::size(kMigrations) == Store::kSchemaVersion);
 
@@ -145,6 +156,7 @@ void Store::create_at_version(const std::filesystem::path& file, int version) {
   if (version < 0 || version > kSchemaVersion)
     throw Error::out_of_range("version", version, 0, kSchemaVersion);
   Connection c(file, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+  if (version == kSchemaVersion) c.exec("PRAGMA auto_vacuum = INCREMENTAL");
   for (int v = 0; v < version; ++v) {
     c.exec(kMigrations[v]);
     c.exec(fmt::format("PRAGMA user_version = {}", v + 1).c_str());
@@ -168,6 +180,22 @@ void Store::migrate() {
     t.commit();
     spdlog::info("store: migrated {} to schema version {}", path_.string(), version + 1);
   }
+  incremental_vacuum_on();
+}
+
+void Store::incremental_vacuum_on() {
+  // 2: INCREMENTAL (https://www.sqlite.org/pragma.html#pragma_auto_vacuum). A new file takes
+  // it before anything is written to it; an existing one only through a VACUUM, which
+  // rewrites the file (and needs as much free space again) once.
+  // A new file took it before WAL mode first wrote its header (configure_writer).
+  const auto mode = db::query_one(*writer_, "PRAGMA auto_vacuum", [](const db::Stmt& s) { return s.i64(0); });
+  if (mode == 2) return;
+  writer_->begin_write();
+  writer_->exec("PRAGMA auto_vacuum = INCREMENTAL");  // what the VACUUM below applies
+  spdlog::info("store: rewriting {} once with auto_vacuum = INCREMENTAL (VACUUM), so that pruning returns space",
+               path_.string());
+  writer_->exec("VACUUM");
+  writer_->committed();
 }
 
 }  // namespace gonio::daemon

@@ -61,6 +61,11 @@ Store::Store(const std::filesystem::path& file, bool synchronous_full)
 Store::~Store() = default;
 
 void Store::configure_writer(Connection& c) const {
+  // A file with nothing written yet takes this at once (schema.cpp, migration 7): WAL mode
+  // writes the header, after which only a VACUUM changes it. Asked of an existing file it
+  // would be a write, which a full disk refuses.
+  std::error_code ec;
+  if (std::filesystem::file_size(path_, ec) == 0 || ec) c.exec("PRAGMA auto_vacuum = INCREMENTAL");
   c.exec("PRAGMA journal_mode = WAL");
   c.exec(synchronous_full_ ? "PRAGMA synchronous = FULL" : "PRAGMA synchronous = NORMAL");
   c.exec("PRAGMA foreign_keys = ON");

@@ -148,6 +148,9 @@ struct Config {
   milliseconds move_timeout{60000};
   milliseconds home_timeout{120000};
   milliseconds measure_timeout{30000};
+  // Points of finished scans older than this that the central archive has committed are
+  // pruned (store/retention.hpp); 0: kept for ever.
+  double retention_days = 0;
   milliseconds settle{0};
   // Auto-ranging (autorange.hpp): each point starts at integration_ms (unset: the
   // photometer's own setting when goniod first reads it), saturation shortens it down to

@@ -67,6 +67,9 @@ inline constexpr std::array kMethodTable{
     // central archive
     MethodSpec{.name = "archive.status", .role = Role::viewer},
     MethodSpec{.name = "archive.reship", .role = Role::technician, .blocking = true},
+    // backups of the store
+    MethodSpec{.name = "backup.create", .role = Role::admin, .blocking = true},
+    MethodSpec{.name = "backup.read", .role = Role::admin, .blocking = true},
     // twin
     MethodSpec{.name = "twin.predict", .role = Role::technician, .blocking = true},
     // subscriptions

@@ -128,7 +128,7 @@ struct AlertFilter {
 
 class Store {
  public:
-  static constexpr int kSchemaVersion = 6;
+  static constexpr int kSchemaVersion = 7;
 
   // Opens (creating) the database; runs migrations. Throws Error(io_error) when the file
   // cannot be opened, Error(unsupported) when it is newer than this build.
@@ -245,6 +245,51 @@ class Store {
   bool delete_token(const std::string& name);
   std::vector<TokenEntry> tokens() const;
 
+  // ---- retention (retention.cpp, store.retention_days)
+  struct PruneResult {
+    std::int64_t scans = 0;        // whose points were pruned
+    std::int64_t points = 0;       // removed
+    std::int64_t pages_freed = 0;  // returned to the file system by the incremental vacuum
+  };
+  // Removes the points of up to `max_scans` finished scans (completed, failed, cancelled)
+  // that finished before `before` (UTC ISO-8601) and whose every point the central archive
+  // has committed (archived_points), with nothing of them left in the outbox: never a point
+  // the archive does not hold. The scan rows (counters, times, state), their fits and
+  // verdicts, alerts and audit stay; the scan is marked points_pruned_at. One transaction
+  // per scan, then the freed pages go back to the file system a step at a time, so the
+  // writer is never held for long.
+  PruneResult prune_archived(const std::string& before, std::size_t max_scans = 100);
+  // When scan `id`'s points were pruned, if they were.
+  std::optional<std::string> points_pruned_at(std::int64_t id) const;
+  // Returns the store's free pages to the file system, `pages_per_step` per transaction.
+  std::int64_t release_free_pages(int pages_per_step = 2048);
+
+  // ---- backup and restore (backup.cpp)
+  // What a copy of the store holds, and what making it cost.
+  struct BackupInfo {
+    std::uint64_t bytes = 0;
+    int schema_version = 0;
+    std::int64_t scans = 0;
+    std::int64_t points = 0;   // stored (pruned ones not counted)
+    double seconds = 0;        // backup_to: the copy's wall time
+  };
+  // A consistent copy of the store as it was when the call began, written to `dest` (which
+  // must not exist) by SQLite's online backup API: `pages_per_step` pages per step, all from
+  // one read snapshot held for the whole copy. In WAL mode a reader never blocks the writer,
+  // so scans go on storing points meanwhile; the snapshot keeps the copy from restarting at
+  // every commit, as the backup API does when its source changes between steps. The copy is
+  // in rollback-journal mode: one self-contained file. Throws Error(io_error) naming `dest`.
+  BackupInfo backup_to(const std::filesystem::path& dest, int pages_per_step = 1024) const;
+  // Whether `file` is a store this goniod can open: an SQLite database whose integrity check
+  // passes, with a gonio schema version (1..kSchemaVersion) and the gonio tables. Opens it
+  // read-only. Throws Error(invalid_argument, field "file") naming the file and what is wrong.
+  static BackupInfo inspect(const std::filesystem::path& file);
+  // Restores the copy `file` as `state_dir`/goniod.db. `state_dir` must be absent or empty:
+  // anything else is refused with Error(invalid_state, field "state_dir") naming it, as is a
+  // file inspect() refuses, and nothing is written then. An older schema migrates at the
+  // next open, as usual.
+  static BackupInfo restore(const std::filesystem::path& file, const std::filesystem::path& state_dir);
+
   // ---- storage (storage.hpp)
   struct StorageState {
     std::filesystem::path dir;
@@ -290,6 +335,8 @@ class Store {
   // WAL, the synchronous level asked for, foreign keys: each time the writer is opened.
   void configure_writer(Connection& c) const;
   void migrate();
+  // auto_vacuum = INCREMENTAL on the file (schema 7), with the VACUUM an existing file needs.
+  void incremental_vacuum_on();
   void outbox_in(OutboxRow::Kind kind, std::int64_t ref, std::int64_t idx,
                  const nlohmann::json& detail = nullptr);
   void outbox_written();
