@@ -50,14 +50,28 @@ std::string to_csv(const Scan& scan, const std::vector<PointRecord>& points, boo
   return out;
 }
 
-// The measured BRDF on an isotropic spherical grid.
-twin::BsdfTable to_table(const Scan& scan, const std::vector<PointRecord>& points) {
+// The measured BRDF on an isotropic spherical grid; the nodes the scan did not measure (the
+// arms' collision zone, or any direction left out) hold 0, the mark of a direction not
+// measured that the twin's readers know (BsdfTable::covers). Neither format has another:
+// the IS-SA specification (Rykowski, "BSDF Data Interchange File Format Specification",
+// 2008) and SSDD 0.3 (libbsdf doc/SsddFileFormatSpecification.md) both define the data as
+// BSDF values, non-negative numbers, with no reserved value — and IS-SA files from
+// instruments write 0 where they measured nothing (below the horizon). The header names
+// the gaps in comment lines, which both formats allow ('#').
+twin::InPlaneTable to_table(const Scan& scan, const std::vector<PointRecord>& points) {
   if (points.empty()) throw Error(Errc::unsupported, "the scan has no measured point to export");
   std::vector<twin::InPlaneReading> readings;
   readings.reserve(points.size());
   for (const auto& p : points) readings.push_back({p.planned, p.measured.values, p.index});
-  return twin::in_plane_table(readings, scan.plan.wavelengths.values(),
-                              {.what = "the scan", .remedy = "export csv or json", .field = {}});
+  return twin::in_plane_table_with_gaps(readings, scan.plan.wavelengths.values(),
+                                        {.what = "the scan", .remedy = "export csv or json", .field = {}});
+}
+
+std::string gap_comment(const twin::InPlaneTable& t) {
+  if (t.gaps.empty()) return {};
+  std::string s = fmt::format("\nnot measured ({} nodes, written as 0 in every channel):", t.gaps.size());
+  for (const auto& r : t.gap_ranges()) s += "\n  " + r;
+  return s;
 }
 
 }  // namespace
@@ -75,7 +89,8 @@ ExportResult export_scan(const Scan& scan, const std::vector<PointRecord>& point
     r.content = nlohmann::json{{"scan", nlohmann::json(scan)}, {"points", points}}.dump(1);
   } else if (format == "bsdf" || format == "ssdd") {
     r.media_type = "text/plain";
-    const auto table = to_table(scan, points);
+    const auto measured = to_table(scan, points);
+    const auto& table = measured.table;
     std::ostringstream os;
     const auto comment = fmt::format("gonio scan {} (sample {}), measured BRDF f = beta/pi",
                                      scan.id, scan.plan.sample_id);
@@ -83,16 +98,20 @@ ExportResult export_scan(const Scan& scan, const std::vector<PointRecord>& point
       // A spectral scan keeps its colour: IS-SA XYZ blocks (D65, 10° observer, Y = the
       // luminance factor), as gonio-twin convert writes them; a single channel is Monochrome.
       twin::IssaWriteOptions o;
+      o.keep_gaps = true;
       o.xyz_weights = twin::xyz_weights(table.wavelengths());
       o.comment = o.xyz_weights ? comment + "; XYZ: CIE 1964 10 deg observer, D65; Y = luminance factor"
                                 : comment;
+      o.comment += gap_comment(measured);
+      if (!measured.gaps.empty())
+        o.comment += "\nTIS counts the directions not measured as 0";
       twin::write_issa(os, table, false, o);
     } else {
       twin::TabulatedParts parts;
       parts.brdf = table;
       parts.name = scan.plan.name;
       twin::SsddWriteOptions o;
-      o.comment = comment;
+      o.comment = comment + gap_comment(measured);
       o.name_entry = false;  // the scan's name as a comment: readers do not use NAME
       o.source = twin::SsddSource::measured;
       twin::write_ssdd(os, parts, o);

@@ -6,7 +6,9 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <set>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -33,10 +35,9 @@ std::string name_of(const InPlaneReading& r) {
                       : r.geometry.to_string();
 }
 
-}  // namespace
-
-BsdfTable in_plane_table(std::span<const InPlaneReading> readings,
-                         std::vector<double> wavelengths_nm, const InPlaneErrorText& text) {
+// The table, with or without unmeasured nodes (`gaps`: null refuses them).
+BsdfTable build(std::span<const InPlaneReading> readings, std::vector<double> wavelengths_nm,
+                const InPlaneErrorText& text, std::vector<Geometry>* gaps) {
   const std::size_t channels = wavelengths_nm.size();
   std::set<double> ti, to, sides;
   std::map<CellKey, Cell> cells;
@@ -68,22 +69,86 @@ BsdfTable in_plane_table(std::span<const InPlaneReading> readings,
   axes.p2.assign(to.begin(), to.end());
   axes.p3.assign(sides.begin(), sides.end());
   const auto &p0 = axes.p0, &p2 = axes.p2, &p3 = axes.p3;
+  const auto signed_theta_r = [](double theta_o, double side) { return side > 90 ? theta_o : -theta_o; };
   std::vector<double> values(p0.size() * p2.size() * p3.size() * channels);
   for (std::size_t i3 = 0; i3 < p3.size(); ++i3)
     for (std::size_t i2 = 0; i2 < p2.size(); ++i2)
       for (std::size_t i0 = 0; i0 < p0.size(); ++i0) {
         const auto it = cells.find({p0[i0], p2[i2], p3[i3]});
-        if (it == cells.end())
-          throw Error(Errc::unsupported,
-                      fmt::format("{} are not a full grid: no point at θi = {:g}°, θr = {:g}°; {}",
-                                  text.what, p0[i0], p3[i3] > 90 ? p2[i2] : -p2[i2], text.remedy),
-                      text.field);
+        if (it == cells.end()) {
+          if (!gaps)
+            throw Error(Errc::unsupported,
+                        fmt::format("{} are not a full grid: no point at θi = {:g}°, θr = {:g}°; {}",
+                                    text.what, p0[i0], signed_theta_r(p2[i2], p3[i3]), text.remedy),
+                        text.field);
+          gaps->push_back(Geometry::in_plane(p0[i0], signed_theta_r(p2[i2], p3[i3])));
+          continue;  // zeros: not measured
+        }
         const std::size_t base = ((i3 * p2.size() + i2) * p0.size() + i0) * channels;
         for (std::size_t c = 0; c < channels; ++c)
           values[base + c] = it->second.sum[c] / it->second.count;
       }
+  if (gaps) {
+    // By θi then θr; θr = 0 lies on both sides and is one gap.
+    const auto key = [](const Geometry& g) { return std::pair(g.theta_i, g.theta_r); };
+    std::ranges::sort(*gaps, {}, key);
+    const auto dup = std::ranges::unique(*gaps, {}, key);
+    gaps->erase(dup.begin(), dup.end());
+  }
   return BsdfTable(TableParam::spherical, std::move(axes), std::move(wavelengths_nm),
                    std::move(values), TableReduction{true, false});
+}
+
+}  // namespace
+
+BsdfTable in_plane_table(std::span<const InPlaneReading> readings,
+                         std::vector<double> wavelengths_nm, const InPlaneErrorText& text) {
+  return build(readings, std::move(wavelengths_nm), text, nullptr);
+}
+
+InPlaneTable in_plane_table_with_gaps(std::span<const InPlaneReading> readings,
+                                      std::vector<double> wavelengths_nm,
+                                      const InPlaneErrorText& text) {
+  InPlaneTable t;
+  t.table = build(readings, std::move(wavelengths_nm), text, &t.gaps);
+  return t;
+}
+
+std::vector<std::string> InPlaneTable::gap_ranges() const {
+  // Runs of unmeasured nodes (ASCII: file headers are read by tools that expect it) along each incidence angle's row of signed θr nodes.
+  std::vector<std::string> out;
+  const auto& ax = table.axes();
+  const bool back = std::ranges::find(ax.p3, 0.0) != ax.p3.end();
+  const bool front = std::ranges::find(ax.p3, 180.0) != ax.p3.end();
+  std::set<double> row;
+  for (const double t : ax.p2) {
+    if (back) row.insert(-t);
+    if (front) row.insert(t);
+  }
+  for (const double ti : ax.p0) {
+    std::string ranges;
+    std::optional<double> first, last;
+    const auto close = [&] {
+      if (!first) return;
+      ranges += (ranges.empty() ? "" : ", ") +
+                (*first == *last ? fmt::format("{:g}", *first)
+                                 : fmt::format("{:g} to {:g}", *first, *last));
+      first.reset();
+    };
+    for (const double tr : row) {
+      const bool gap = std::ranges::binary_search(
+          gaps, std::pair(ti, tr), {}, [](const Geometry& g) { return std::pair(g.theta_i, g.theta_r); });
+      if (!gap) {
+        close();
+        continue;
+      }
+      if (!first) first = tr;
+      last = tr;
+    }
+    close();
+    if (!ranges.empty()) out.push_back(fmt::format("theta_i = {:g} deg: theta_r = {} deg", ti, ranges));
+  }
+  return out;
 }
 
 }  // namespace gonio::twin

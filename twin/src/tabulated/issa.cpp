@@ -337,6 +337,18 @@ std::vector<std::string> write_issa(std::ostream& out, const BsdfTable& table, b
   if (azimuth.empty())
     azimuth = native ? table.axis(3) : plane ? range(0, 180, 5) : range(0, 355, 5);
   if (radial.empty()) radial = native ? table.axis(2) : default_radial();
+  if (o.keep_gaps && o.radial.empty() && table.param() == TableParam::spherical) {
+    // The in-plane nodes' distances from the specular direction: ahead of it (φo = 180°)
+    // |θo − θi|, behind it through the normal (φo = 0°) θi + θo.
+    for (const double ti : table.axis(0))
+      for (const double to : table.axis(2)) {
+        radial.push_back(std::abs(to - ti));
+        if (ti + to <= 180) radial.push_back(ti + to);
+      }
+    std::ranges::sort(radial);
+    const auto dup = std::ranges::unique(radial, [](double a, double b) { return b - a < 1e-9; });
+    radial.erase(dup.begin(), dup.end());
+  }
   check_option_list(incidence, "incidence", 0, 90);
   check_option_list(azimuth, "azimuth", 0, plane ? 180 : 360);
   check_option_list(radial, "radial", 0, 180);
@@ -360,7 +372,8 @@ std::vector<std::string> write_issa(std::ostream& out, const BsdfTable& table, b
           // Beyond the horizon the file still needs a value; the one at the horizon along
           // the same azimuth keeps interpolation near grazing angles unbiased.
           const Vec3 wo = frame.direction_above(radial[j] * kDegToRad, azimuth[a] * kDegToRad);
-          t.eval(wi, wo, {&f, 1});
+          if (o.keep_gaps && !t.covers(t.coords(wi, wo))) f = 0;
+          else t.eval(wi, wo, {&f, 1});
           v[(a * radial.size() + j) * incidence.size() + i] = f;
         }
     }

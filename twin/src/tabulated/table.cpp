@@ -335,7 +335,7 @@ bool BsdfTable::covers(const std::array<double, 4>& p) const noexcept {
     for (int k = 0; k < 4; ++k) {
       const bool hi = (corner >> k) & 1;
       const double w = hi ? pos[k].t : 1 - pos[k].t;
-      used = used && w != 0;
+      used = used && w > kEps;  // a direction on a node, up to rounding, uses that node alone
       i[k] = hi ? pos[k].i1 : pos[k].i0;
     }
     if (!used) continue;

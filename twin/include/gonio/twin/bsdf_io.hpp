@@ -50,6 +50,13 @@ struct IssaWriteOptions {
   // non-selective table equals its value).
   std::optional<std::array<std::vector<double>, 3>> xyz_weights;
   std::string comment;  // written as '#' lines at the top
+  // The table marks directions it did not measure with nodes that are 0 in every channel
+  // (in_plane_table_with_gaps; neither IS-SA nor SSDD defines another "no data" value): a
+  // node of the file interpolated from such a node, or beyond the table's measured extent,
+  // is written as 0 too, so that a gap stays a gap instead of a blend with it; and a
+  // spherical table's in-plane nodes join the default radial list, so that every measured
+  // value is written as it is.
+  bool keep_gaps = false;
 };
 // Writes one table (BRDF, or BTDF when `transmission`). Values are f in sr⁻¹; TIS per
 // channel and angle of incidence is the directional-hemispherical integral of the file's own

@@ -32,4 +32,19 @@ struct InPlaneErrorText {
 BsdfTable in_plane_table(std::span<const InPlaneReading> readings,
                          std::vector<double> wavelengths_nm, const InPlaneErrorText& text);
 
+// The same table from readings that leave nodes of the grid unmeasured — a scan through the
+// specular peak cannot hold the mirrored angles near retro-reflection (the arms' clearance):
+// an unmeasured node holds 0 in every channel, the mark BsdfTable::covers() reads as "not
+// measured" (IS-SA and SSDD define no other; bsdf_formats.md), and is listed in `gaps`.
+struct InPlaneTable {
+  BsdfTable table;
+  std::vector<Geometry> gaps;  // in-plane geometries of the unmeasured nodes, by θi then θr
+  // "theta_i = 45 deg: theta_r = -80 to -32 deg" per incidence angle with gaps, for a file's
+  // header (ASCII).
+  std::vector<std::string> gap_ranges() const;
+};
+InPlaneTable in_plane_table_with_gaps(std::span<const InPlaneReading> readings,
+                                      std::vector<double> wavelengths_nm,
+                                      const InPlaneErrorText& text);
+
 }  // namespace gonio::twin
