@@ -9,7 +9,7 @@ find_package(tomlplusplus REQUIRED)
 find_package(CLI11 REQUIRED)
 find_package(Boost 1.74 REQUIRED COMPONENTS system)
 find_package(SQLite3 REQUIRED)
-find_package(OpenSSL REQUIRED)  # SHA-256 and constant-time compare of bearer tokens
+find_package(OpenSSL REQUIRED)  # TLS listeners and gonioctl; SHA-256 and constant-time compare of bearer tokens
 pkg_check_modules(MODBUS REQUIRED IMPORTED_TARGET libmodbus)
 pkg_check_modules(LIBUSB REQUIRED IMPORTED_TARGET libusb-1.0)
 pkg_check_modules(SYSTEMD REQUIRED IMPORTED_TARGET libsystemd)

@@ -42,9 +42,10 @@ def bin_dir() -> str:
     return d
 
 
-def config(tcp_port: int = 0, http_port: int = 0, extra: str = "") -> str:
+def config(tcp_port: int = 0, http_port: int = 0, extra: str = "", listen_more=()) -> str:
+    more = "".join(f', "{u}"' for u in listen_more)
     return (f'[server]\nlog_level = "info"\nlisten = ["tcp://127.0.0.1:{tcp_port}", '
-            f'"http://127.0.0.1:{http_port}"]\nweb_root = ""\n\n'
+            f'"http://127.0.0.1:{http_port}"{more}]\nweb_root = ""\n\n'
             f'[instrument.motion]\ndriver = "mock"\nsample = "{TRUE_SAMPLE}"\ntime_scale = 0\n\n'
             f'[instrument.photometer]\ndriver = "mock"\n\n'
             f'[twin]\nthreads = 1\nrel_se = 0.01\nreplicates = 8\n\n{extra}')
@@ -54,11 +55,11 @@ class Goniod:
     """goniod --state-dir TMP --config TMP/test.toml; stop() and start() again on the same
     state dir (ports fixed at construction so that a restart keeps its URLs)."""
 
-    def __init__(self, fixed_ports: bool = True, extra: str = ""):
+    def __init__(self, fixed_ports: bool = True, extra: str = "", listen_more=()):
         self.state_dir = tempfile.mkdtemp(prefix="gonio-pytest-")
         ports = (free_port(), free_port()) if fixed_ports else (0, 0)
         with open(os.path.join(self.state_dir, "test.toml"), "w") as f:
-            f.write(config(*ports, extra))
+            f.write(config(*ports, extra, listen_more))
         self.proc = None
         self.start()
 

@@ -92,3 +92,20 @@ def test_the_name_must_match_the_host(pki, server):
     # signed by the trusted CA, but for goniod.elsewhere.example, not 127.0.0.1
     with pytest.raises(gonio.TlsError, match="not trusted.*(mismatch|match)"):
         gonio.connect(f"tls://127.0.0.1:{server}", token="t", ca=str(pki / "ca.crt"))
+
+
+def test_goniod_over_tls_and_https_verified_by_ca(pki):
+    """A real goniod with tls:// and https:// listeners: the client verifies it against ca=,
+    and calls over NDJSON/TLS and over HTTPS."""
+    from goniod_process import Goniod
+    (pki / "server.key").chmod(0o600)
+    tls = f'[server.tls]\ncert = "{pki / "server.crt"}"\nkey = "{pki / "server.key"}"\n'
+    d = Goniod(fixed_ports=False, extra=tls, listen_more=("tls://127.0.0.1:0", "https://127.0.0.1:0"))
+    try:
+        for scheme, transport in (("tls", "tls"), ("https", "https")):
+            with gonio.connect(d.url(scheme), token_file=d.token_file, ca=str(pki / "ca.crt")) as c:
+                assert c.auth.whoami() == {"name": "admin", "role": "admin", "transport": transport}
+        with pytest.raises(gonio.TlsError, match="not trusted"):
+            gonio.connect(d.url("tls"), token_file=d.token_file, ca=str(pki / "other.crt"))
+    finally:
+        d.close()

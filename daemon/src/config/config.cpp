@@ -151,9 +151,15 @@ ListenUri ListenUri::parse(std::string_view text, std::string_view field) {
   } else if (text.starts_with("http://")) {
     u.kind = Kind::http;
     host_port(text.substr(7), "http://");
+  } else if (text.starts_with("tls://")) {
+    u.kind = Kind::tls;
+    host_port(text.substr(6), "tls://");
+  } else if (text.starts_with("https://")) {
+    u.kind = Kind::https;
+    host_port(text.substr(8), "https://");
   } else {
-    throw Error::invalid(f, fmt::format("'{}' is not unix:PATH, tcp://HOST:PORT or "
-                                        "http://HOST:PORT",
+    throw Error::invalid(f, fmt::format("'{}' is not unix:PATH, tcp://HOST:PORT, http://HOST:PORT, "
+                                        "tls://HOST:PORT or https://HOST:PORT",
                                         text));
   }
   return u;
@@ -237,6 +243,8 @@ std::string ListenUri::to_string() const {
     case Kind::unix_socket: return "unix:" + path;
     case Kind::tcp: return "tcp://" + hp;
     case Kind::http: return "http://" + hp;
+    case Kind::tls: return "tls://" + hp;
+    case Kind::https: return "https://" + hp;
   }
   return {};
 }
@@ -307,6 +315,17 @@ void Config::validate() const {
                              fmt::format("{} is not a loopback address; set "
                                          "server.allow_remote = true to listen on it",
                                          listen[i].to_string()));
+  for (std::size_t i = 0; i < listen.size(); ++i)
+    if (listen[i].tls() && (tls.cert.empty() || tls.key.empty()))
+      throw Error::invalid(fmt::format("server.listen[{}]", i),
+                           fmt::format("{} needs a certificate and its key: set server.tls.cert and "
+                                       "server.tls.key",
+                                       listen[i].to_string()));
+  if (tls.cert.empty() != tls.key.empty())
+    throw Error::invalid(tls.cert.empty() ? "server.tls.cert" : "server.tls.key",
+                         "server.tls.cert and server.tls.key go together");
+  if (!tls.client_ca.empty() && tls.cert.empty())
+    throw Error::invalid("server.tls.client_ca", "needs server.tls.cert and server.tls.key");
   if (!webhook_url.empty()) {
     if (!webhook_url.starts_with("http://"))
       throw Error::invalid("webhook.url", fmt::format("'{}' must start with http://", webhook_url));

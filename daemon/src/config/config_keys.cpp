@@ -336,6 +336,36 @@ void server_keys(std::vector<ConfigKey>& k) {
                      "one of trace, debug, info, warn, error", "how much goniod logs"));
 }
 
+// [server.tls]: a file of the tls:// and https:// listeners, an absolute path. Whether it
+// can be read, its mode and whether the certificate is current are checked when goniod
+// loads it (net::check_tls_files, also run by --check-config), not when the file is parsed.
+ConfigKey tls_file_key(std::string_view name, std::string Config::Tls::*m, std::string_view doc) {
+  return with_default(then(text("server.tls", name, field(&Config::tls, m), doc),
+                           [=](const Config& c) {
+                             const auto& path = c.tls.*m;
+                             if (!path.empty() && path.front() != '/')
+                               throw Error::invalid(fmt::format("server.tls.{}", name),
+                                                    fmt::format("'{}' must be an absolute path", path));
+                           }),
+                      "—");
+}
+
+void tls_keys(std::vector<ConfigKey>& k) {
+  using T = Config::Tls;
+  k.push_back(tls_file_key("cert", &T::cert,
+                           "the `tls://` and `https://` listeners' certificate (PEM; intermediate "
+                           "certificates after it), re-read on `SIGHUP`; refused when expired or "
+                           "not yet valid"));
+  k.push_back(tls_file_key("key", &T::key,
+                           "… its private key (PEM), readable by its owner only (mode 0600 or 0400); "
+                           "refused when it does not match the certificate"));
+  k.push_back(tls_file_key("client_ca", &T::client_ca,
+                           "CA certificates (PEM) that client certificates are verified against; "
+                           "a client that presents none may still `auth.login`, one whose subject "
+                           "CN is the name of a token gets that token's name and role (TLS in "
+                           "[README](#tls))"));
+}
+
 // [auth]: tokens; [auth.unix]: the roles of Unix-socket peers
 void auth_keys(std::vector<ConfigKey>& k) {
   using C = Config;
@@ -584,7 +614,7 @@ void archive_keys(std::vector<ConfigKey>& k) {
 
 std::vector<ConfigKey> make_keys() {
   std::vector<ConfigKey> k;
-  for (auto* section : {server_keys, auth_keys, store_keys, instrument_keys, limits_keys, twin_keys,
+  for (auto* section : {server_keys, tls_keys, auth_keys, store_keys, instrument_keys, limits_keys, twin_keys,
                         divergence_keys, webhook_keys, mqtt_keys, archive_keys})
     section(k);
   return k;

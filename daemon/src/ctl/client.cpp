@@ -12,11 +12,15 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <csignal>
 #include <cstdint>
 #include <cstring>
 #include <iterator>
 
 #include <fmt/format.h>
+#include <openssl/err.h>
+#include <openssl/ssl.h>
+#include <openssl/x509v3.h>
 
 namespace gonio::daemon {
 
@@ -28,6 +32,30 @@ namespace {
 int remaining_ms(Clock::time_point deadline) {
   const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
   return ms < 0 ? 0 : static_cast<int>(std::min<long long>(ms, 1 << 30));
+}
+
+// tcp://HOST:PORT, tls://HOST:PORT, [IPv6]:PORT → host and port.
+std::pair<std::string, std::string> host_port(const std::string& uri) {
+  std::string rest = uri.substr(uri.find("://") + 3);
+  if (!rest.empty() && rest.back() == '/') rest.pop_back();
+  if (!rest.empty() && rest.front() == '[') {
+    const auto close = rest.find("]:");
+    if (close == std::string::npos) throw ConnectionError(fmt::format("{}: bad address", uri));
+    return {rest.substr(1, close - 1), rest.substr(close + 2)};
+  }
+  const auto colon = rest.rfind(':');
+  if (colon == std::string::npos) throw ConnectionError(fmt::format("{}: expected HOST:PORT", uri));
+  return {rest.substr(0, colon), rest.substr(colon + 1)};
+}
+
+// The last OpenSSL error of this thread, the queue cleared.
+std::string openssl_error() {
+  unsigned long last = 0;
+  while (const unsigned long e = ERR_get_error()) last = e;
+  if (last == 0) return std::strerror(errno);
+  char text[256];
+  ERR_error_string_n(last, text, sizeof text);
+  return text;
 }
 
 }  // namespace
@@ -48,18 +76,8 @@ int connect_uri(const std::string& uri, std::chrono::milliseconds timeout) {
     }
     return fd;
   }
-  if (uri.starts_with("tcp://")) {
-    std::string rest = uri.substr(6), host, port;
-    if (!rest.empty() && rest.back() == '/') rest.pop_back();
-    if (!rest.empty() && rest.front() == '[') {
-      const auto close = rest.find("]:");
-      if (close == std::string::npos) throw ConnectionError(fmt::format("{}: bad address", uri));
-      host = rest.substr(1, close - 1), port = rest.substr(close + 2);
-    } else {
-      const auto colon = rest.rfind(':');
-      if (colon == std::string::npos) throw ConnectionError(fmt::format("{}: expected HOST:PORT", uri));
-      host = rest.substr(0, colon), port = rest.substr(colon + 1);
-    }
+  if (uri.starts_with("tcp://") || uri.starts_with("tls://")) {
+    const auto [host, port] = host_port(uri);
     addrinfo hints{};
     hints.ai_socktype = SOCK_STREAM;
     addrinfo* res = nullptr;
@@ -97,23 +115,106 @@ int connect_uri(const std::string& uri, std::chrono::milliseconds timeout) {
     if (fd < 0) throw ConnectionError(fmt::format("cannot connect to {}: {}", uri, last));
     return fd;
   }
-  throw ConnectionError(fmt::format("'{}' is not unix:PATH or tcp://HOST:PORT", uri));
+  throw ConnectionError(fmt::format("'{}' is not unix:PATH, tcp://HOST:PORT or tls://HOST:PORT", uri));
 }
 
-Client::Client(const std::string& uri, std::chrono::milliseconds timeout)
-    : fd_(connect_uri(uri, timeout)), uri_(uri), timeout_(timeout) {}
+Client::Client(const std::string& uri, std::chrono::milliseconds timeout, const std::string& ca)
+    : fd_(connect_uri(uri, timeout)), uri_(uri), timeout_(timeout) {
+  if (!uri.starts_with("tls://")) return;
+  try {
+    start_tls(ca);
+  } catch (...) {
+    close_connection();  // no destructor for a constructor that throws
+    throw;
+  }
+}
 
-Client::~Client() {
+Client::~Client() { close_connection(); }
+
+void Client::close_connection() noexcept {
+  if (tls_) SSL_free(tls_);
+  if (tls_ctx_) SSL_CTX_free(tls_ctx_);
   if (fd_ >= 0) ::close(fd_);
+  tls_ = nullptr, tls_ctx_ = nullptr, fd_ = -1;
 }
 
 Client::Client(Client&& o) noexcept
-    : fd_(o.fd_), uri_(std::move(o.uri_)), timeout_(o.timeout_), buffer_(std::move(o.buffer_)),
-      consumed_(o.consumed_), notifications_(std::move(o.notifications_)), next_id_(o.next_id_) {
+    : fd_(o.fd_), tls_ctx_(o.tls_ctx_), tls_(o.tls_), uri_(std::move(o.uri_)), timeout_(o.timeout_),
+      buffer_(std::move(o.buffer_)), consumed_(o.consumed_), notifications_(std::move(o.notifications_)),
+      next_id_(o.next_id_) {
   o.fd_ = -1;
+  o.tls_ctx_ = nullptr;
+  o.tls_ = nullptr;
+}
+
+// TLS 1.2 or 1.3; the certificate must chain to `ca` (else the system's CAs) and name the
+// URI's host (RFC 6125: a DNS name, or an IP address in subjectAltName).
+void Client::start_tls(const std::string& ca) {
+  // OpenSSL writes with write(2): a server that has gone would otherwise end gonioctl by SIGPIPE.
+  std::signal(SIGPIPE, SIG_IGN);
+  tls_ctx_ = SSL_CTX_new(TLS_client_method());
+  if (!tls_ctx_ || SSL_CTX_set_min_proto_version(tls_ctx_, TLS1_2_VERSION) != 1)
+    throw ConnectionError(fmt::format("{}: OpenSSL: {}", uri_, openssl_error()));
+  if (ca.empty() ? SSL_CTX_set_default_verify_paths(tls_ctx_) != 1
+                 : SSL_CTX_load_verify_locations(tls_ctx_, ca.c_str(), nullptr) != 1)
+    throw ConnectionError(fmt::format("--ca {}: cannot read CA certificates: {}", ca, openssl_error()));
+  SSL_CTX_set_verify(tls_ctx_, SSL_VERIFY_PEER, nullptr);
+  tls_ = SSL_new(tls_ctx_);
+  if (!tls_ || SSL_set_fd(tls_, fd_) != 1) throw ConnectionError(fmt::format("{}: OpenSSL: {}", uri_, openssl_error()));
+  const auto host = host_port(uri_).first;
+  unsigned char ip[16];
+  const bool literal = inet_pton(AF_INET, host.c_str(), ip) == 1 || inet_pton(AF_INET6, host.c_str(), ip) == 1;
+  if (literal) {
+    X509_VERIFY_PARAM_set1_ip_asc(SSL_get0_param(tls_), host.c_str());
+  } else {
+    SSL_set1_host(tls_, host.c_str());
+    // SNI (SSL_set_tlsext_host_name, a macro with a C cast)
+    SSL_ctrl(tls_, SSL_CTRL_SET_TLSEXT_HOSTNAME, TLSEXT_NAMETYPE_host_name, const_cast<char*>(host.c_str()));
+  }
+  // The handshake, like every read, waits at most the timeout.
+  timeval tv{static_cast<time_t>(timeout_.count() / 1000), static_cast<suseconds_t>(timeout_.count() % 1000 * 1000)};
+  ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  ::setsockopt(fd_, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
+  if (SSL_connect(tls_) != 1) {
+    const long verify = SSL_get_verify_result(tls_);
+    if (verify != X509_V_OK)
+      throw ConnectionError(fmt::format("{}: the server's certificate is not trusted: {}{}", uri_,
+                                        X509_verify_cert_error_string(verify),
+                                        ca.empty() ? " (name the CA that signed it with --ca FILE)" : ""));
+    throw ConnectionError(fmt::format("{}: TLS handshake failed: {}", uri_, openssl_error()));
+  }
+}
+
+long Client::receive(char* buf, std::size_t size) {
+  if (!tls_) {
+    const auto n = ::recv(fd_, buf, size, 0);
+    if (n < 0 && errno == EINTR) return 0;
+    if (n < 0) throw ConnectionError(fmt::format("{}: recv: {}", uri_, std::strerror(errno)));
+    if (n == 0) throw ConnectionError(fmt::format("{}: the server closed the connection", uri_));
+    return n;
+  }
+  const int n = SSL_read(tls_, buf, static_cast<int>(std::min<std::size_t>(size, 1 << 30)));
+  if (n > 0) return n;
+  switch (SSL_get_error(tls_, n)) {
+    case SSL_ERROR_WANT_READ:
+    case SSL_ERROR_WANT_WRITE: return 0;  // a record without data (a TLS 1.3 session ticket)
+    case SSL_ERROR_ZERO_RETURN: throw ConnectionError(fmt::format("{}: the server closed the connection", uri_));
+    default:
+      if (errno == EAGAIN || errno == EWOULDBLOCK)
+        throw ConnectionError(fmt::format("{}: no data within {} s", uri_, timeout_.count() / 1000.0));
+      ERR_clear_error();
+      // goniod closes without a close_notify: an end of the stream is the server closing.
+      throw ConnectionError(fmt::format("{}: the server closed the connection", uri_));
+  }
 }
 
 void Client::send_all(std::string_view data) {
+  if (tls_) {
+    if (data.empty()) return;
+    if (SSL_write(tls_, data.data(), static_cast<int>(data.size())) <= 0)
+      throw ConnectionError(fmt::format("{}: send: {}", uri_, openssl_error()));
+    return;
+  }
   std::size_t off = 0;
   while (off < data.size()) {
     const auto n = ::send(fd_, data.data() + off, data.size() - off, MSG_NOSIGNAL);
@@ -140,16 +241,16 @@ std::optional<std::string_view> Client::next_line(std::chrono::milliseconds time
       return line;
     }
     searched = buffer_.size();
-    pollfd p{fd_, POLLIN, 0};
-    const int rc = ::poll(&p, 1, remaining_ms(deadline));
-    if (rc < 0 && errno == EINTR) continue;
-    if (rc < 0) throw ConnectionError(fmt::format("{}: poll: {}", uri_, std::strerror(errno)));
-    if (rc == 0) return std::nullopt;
+    // Bytes OpenSSL has already decrypted are not on the socket any more.
+    if (!tls_ || SSL_pending(tls_) == 0) {
+      pollfd p{fd_, POLLIN, 0};
+      const int rc = ::poll(&p, 1, remaining_ms(deadline));
+      if (rc < 0 && errno == EINTR) continue;
+      if (rc < 0) throw ConnectionError(fmt::format("{}: poll: {}", uri_, std::strerror(errno)));
+      if (rc == 0) return std::nullopt;
+    }
     char buf[65536];
-    const auto n = ::recv(fd_, buf, sizeof buf, 0);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) throw ConnectionError(fmt::format("{}: recv: {}", uri_, std::strerror(errno)));
-    if (n == 0) throw ConnectionError(fmt::format("{}: the server closed the connection", uri_));
+    const auto n = receive(buf, sizeof buf);
     buffer_.append(buf, static_cast<std::size_t>(n));
   }
 }

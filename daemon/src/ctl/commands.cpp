@@ -28,7 +28,7 @@ Client& Session::client() {
   if (client_) return *client_;
   const auto timeout = std::chrono::milliseconds(static_cast<long long>(o_.timeout_s * 1000));
   const auto uri = o_.connect.empty() ? "unix:" + o_.state_dir + "/goniod.sock" : o_.connect;
-  client_.emplace(uri, timeout);
+  client_.emplace(uri, timeout, o_.ca);
   if (!uri.starts_with("unix:")) {
     std::string token = o_.token;
     if (token.empty()) {
@@ -37,7 +37,7 @@ Client& Session::client() {
       if (in) std::getline(in, token);
     }
     if (token.empty())
-      throw RpcError(rpc::code::unauthorized, "a token is needed over TCP: --token, --token-file or a "
+      throw RpcError(rpc::code::unauthorized, "a token is needed over TCP and TLS: --token, --token-file or a "
                                        "readable <state-dir>/admin.token",
                      json::object());
     client_->login(token);
@@ -72,7 +72,9 @@ int gonioctl_main(int argc, char** argv) {
   o.state_dir = ctl::default_state_dir();
   app.add_option("--state-dir", o.state_dir, "goniod's state dir (socket and admin.token); "
                                              "default $GONIO_STATE_DIR or /var/lib/gonio");
-  app.add_option("--connect", o.connect, "unix:PATH or tcp://HOST:PORT (default: the state dir's socket)");
+  app.add_option("--connect", o.connect, "unix:PATH, tcp://HOST:PORT or tls://HOST:PORT (default: the state dir's socket)");
+  app.add_option("--ca", o.ca, "tls://: the CA certificates (PEM) the server's certificate must chain to "
+                               "(default: the system's)")->check(CLI::ExistingFile);
   app.add_option("--token", o.token, "bearer token (TCP)");
   app.add_option("--token-file", o.token_file, "file holding the bearer token (TCP)");
   app.add_flag("--json", o.json, "print JSON results");

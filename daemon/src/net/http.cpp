@@ -1,4 +1,4 @@
-// HTTP POST /rpc and WebSocket /ws via Boost.Beast (see net.hpp).
+// HTTP POST /rpc and WebSocket /ws via Boost.Beast, plain or over TLS (see net.hpp).
 #include <algorithm>
 #include <atomic>
 #include <cctype>
@@ -12,6 +12,7 @@
 #include <boost/asio/strand.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -19,6 +20,7 @@
 #include "gonio/daemon/net/net.hpp"
 #include "net/accept.hpp"
 #include "net/session.hpp"
+#include "net/tls.hpp"
 
 namespace gonio::daemon::net {
 
@@ -34,19 +36,22 @@ namespace {
 
 constexpr std::size_t kHeaderLimit = 16 * 1024;
 
-class WsSession;
+class WsBase;
 
 struct HttpState {
   Context ctx;
+  bool tls = false;  // https://: transports "https" and "wss"
   std::atomic<std::size_t> connections{0}, accepted{0}, dropped{0}, websockets{0};
   // Connections close() asked to end that have not ended yet (a WebSocket: its closing
   // handshake); shutdown waits a moment for them.
   std::atomic<std::size_t> ending{0};
   std::mutex mu;
-  std::vector<std::weak_ptr<WsSession>> ws;  // for ending the sessions of a revoked token
+  std::vector<std::weak_ptr<WsBase>> ws;  // for ending the sessions of a revoked token
   // Who to close on shutdown; expired entries are pruned as new ones arrive.
   std::vector<std::pair<std::weak_ptr<void>, std::function<void()>>> closers;
-  explicit HttpState(const Context& c) : ctx(c) {}
+  HttpState(const Context& c, bool over_tls) : ctx(c), tls(over_tls) {}
+  const char* http_transport() const { return tls ? "https" : "http"; }
+  const char* ws_transport() const { return tls ? "wss" : "ws"; }
   void add_closer(std::weak_ptr<void> owner, std::function<void()> f) {
     std::lock_guard lock(mu);
     std::erase_if(closers, [](const auto& c) { return c.first.expired(); });
@@ -123,7 +128,7 @@ std::string content_security_policy(std::string_view host) {
 // A request over HTTP POST: no notifications can reach it.
 class OneShot final : public rpc::Session {
  public:
-  OneShot(std::string peer, Principal p) : rpc::Session("http", std::move(peer), false) {
+  OneShot(const char* transport, std::string peer, Principal p) : rpc::Session(transport, std::move(peer), false) {
     set_principal(std::move(p));
   }
   bool push(std::shared_ptr<const std::string>) override { return false; }
@@ -131,10 +136,21 @@ class OneShot final : public rpc::Session {
 
 // ---- WebSocket ----------------------------------------------------------------------------
 
-class WsSession final : public rpc::Session, public std::enable_shared_from_this<WsSession> {
+// What the listener knows of a WebSocket session, whatever its stream.
+class WsBase : public rpc::Session {
  public:
-  WsSession(tcp::socket socket, std::string peer, std::shared_ptr<HttpState> st)
-      : rpc::Session("ws", std::move(peer), true), ws_(std::move(socket)),
+  using rpc::Session::Session;
+  virtual void end(const std::string& why) = 0;
+};
+
+// `Stream`: beast::tcp_stream, or beast::ssl_stream over it (wss://).
+template <class Stream>
+class WsSession final : public WsBase, public std::enable_shared_from_this<WsSession<Stream>> {
+  using std::enable_shared_from_this<WsSession<Stream>>::shared_from_this;
+
+ public:
+  WsSession(Stream stream, std::string peer, std::shared_ptr<HttpState> st)
+      : WsBase(st->ws_transport(), std::move(peer), true), ws_(std::move(stream)),
         read_timer_(ws_.get_executor()), login_timer_(ws_.get_executor()), st_(std::move(st)),
         limits_(st_->ctx.limits), stats_(st_->ctx.stats), out_(limits_, stats_, 0),
         write_deadline_(ws_.get_executor(), limits_.write_timeout) {
@@ -154,7 +170,7 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
     ws_.set_option(websocket::stream_base::decorator(
         [](websocket::response_type& res) { res.set(http::field::server, "goniod"); }));
     auto self = shared_from_this();
-    st_->add_closer(self, [w = std::weak_ptr<WsSession>(self)] {
+    st_->add_closer(self, [w = std::weak_ptr<WsSession<Stream>>(self)] {
       auto s = w.lock();
       if (!s) return;
       ++s->st_->ending;  // counted before it runs: shutdown waits for it
@@ -198,7 +214,7 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
     return true;
   }
 
-  void end(const std::string& why) {
+  void end(const std::string& why) override {
     asio::post(ws_.get_executor(), [self = shared_from_this(), why] { self->close(why); });
   }
 
@@ -329,7 +345,7 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
     if (!writing_) out_.pop(out_.size());
   }
 
-  websocket::stream<beast::tcp_stream> ws_;
+  websocket::stream<Stream> ws_;
   asio::steady_timer read_timer_, login_timer_;
   std::shared_ptr<HttpState> st_;
   Limits limits_;
@@ -345,12 +361,17 @@ class WsSession final : public rpc::Session, public std::enable_shared_from_this
 
 // ---- HTTP ---------------------------------------------------------------------------------
 
-class HttpSession final : public std::enable_shared_from_this<HttpSession> {
+// `Stream`: beast::tcp_stream, or beast::ssl_stream over it (https://).
+template <class Stream>
+class HttpSession final : public std::enable_shared_from_this<HttpSession<Stream>> {
+  using std::enable_shared_from_this<HttpSession<Stream>>::shared_from_this;
+  static constexpr bool kTls = !std::is_same_v<Stream, beast::tcp_stream>;
+
  public:
-  HttpSession(tcp::socket socket, std::shared_ptr<HttpState> st)
-      : stream_(std::move(socket)), st_(std::move(st)), limits_(st_->ctx.limits) {
+  HttpSession(Stream stream, std::shared_ptr<HttpState> st)
+      : stream_(std::move(stream)), ex_(stream_.get_executor()), st_(std::move(st)), limits_(st_->ctx.limits) {
     error_code ec;
-    const auto ep = stream_.socket().remote_endpoint(ec);
+    const auto ep = tcp_().socket().remote_endpoint(ec);
     peer_ = ec ? "?" : fmt::format("{}:{}", ep.address().to_string(), ep.port());
   }
   ~HttpSession() { --st_->connections; }
@@ -361,24 +382,48 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
       auto s = w.lock();
       if (!s) return;
       ++s->st_->ending;
-      asio::post(s->stream_.get_executor(), [s] {
-        error_code ignored;
-        s->stream_.socket().shutdown(tcp::socket::shutdown_both, ignored);
-        s->stream_.close();
+      asio::post(s->ex_, [s] {
+        if (!s->upgraded_) s->close_now();
         --s->st_->ending;
       });
     });
+    if constexpr (kTls) {
+      // The handshake has read_timeout to finish, as a request; until then the peer is owed
+      // nothing and holds no buffers but OpenSSL's.
+      tcp_().expires_after(limits_.read_timeout);
+      stream_.async_handshake(asio::ssl::stream_base::server, [self](const error_code& ec) {
+        if (ec) {
+          ++self->st_->dropped;
+          spdlog::info("https {}: TLS handshake {}", self->peer_,
+                       ec == beast::error::timeout ? fmt::format("did not complete within {} s",
+                                                                 std::chrono::duration<double>(self->limits_.read_timeout).count())
+                                                   : "failed: " + ec.message());
+          return self->close_now();
+        }
+        self->certified_ = certificate_principal(self->stream_.native_handle(), self->st_->ctx.auth, "https");
+        self->do_read();
+      });
+      return;
+    }
     do_read();
   }
 
  private:
+  beast::tcp_stream& tcp_() { return beast::get_lowest_layer(stream_); }
+
+  void close_now() {
+    error_code ignored;
+    tcp_().socket().shutdown(tcp::socket::shutdown_both, ignored);
+    tcp_().close();
+  }
+
   void do_read() {
     parser_.emplace();
     parser_->body_limit(limits_.max_message_bytes);
     parser_->header_limit(kHeaderLimit);
     // One deadline for the whole request (a keep-alive connection waits at most this long
     // for the next one).
-    stream_.expires_after(limits_.read_timeout);
+    tcp_().expires_after(limits_.read_timeout);
     http::async_read(stream_, buffer_, *parser_, [self = shared_from_this()](const error_code& ec, std::size_t) {
       self->on_read(ec);
     });
@@ -424,7 +469,7 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
     const auto token = bearer(req[http::field::authorization]);
     std::optional<Principal> who;
     if (!token.empty()) {
-      who = st_->ctx.auth.authenticate(token, websocket::is_upgrade(req) ? "ws" : "http");
+      who = st_->ctx.auth.authenticate(token, websocket::is_upgrade(req) ? st_->ws_transport() : st_->http_transport());
       if (!who)
         return send(http::status::unauthorized,
                     error_body(rpc::code::unauthorized, "unknown bearer token", Errc::unauthorized),
@@ -435,9 +480,11 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
         return send(http::status::not_found,
                     error_body(rpc::code::method_not_found, "WebSocket endpoint is /ws", Errc::not_found),
                     false, req.version());
-      stream_.expires_never();
-      auto ws = std::make_shared<WsSession>(stream_.release_socket(), peer_, st_);
+      tcp_().expires_never();
+      upgraded_ = true;
+      auto ws = std::make_shared<WsSession<Stream>>(std::move(stream_), peer_, st_);
       if (who) ws->set_principal(*who);
+      else if (certified_) ws->set_principal(as(*certified_, st_->ws_transport()));
       ws->start(std::move(req));
       return;
     }
@@ -465,14 +512,15 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
                   false, req.version());
     }
     Principal p;
-    p.transport = "http";
+    p.transport = st_->http_transport();
     p.name = "anonymous";
     if (who) p = *who;
-    auto session = std::make_shared<OneShot>(peer_, p);
+    else if (certified_) p = *certified_;
+    auto session = std::make_shared<OneShot>(st_->http_transport(), peer_, p);
     const bool keep = req.keep_alive();
     const unsigned version = req.version();
     st_->ctx.dispatcher.handle(req.body(), session, [self = shared_from_this(), keep, version](std::string r) {
-      asio::post(self->stream_.get_executor(), [self, keep, version, r = std::move(r)]() mutable {
+      asio::post(self->ex_, [self, keep, version, r = std::move(r)]() mutable {
         if (r.empty()) return self->send(http::status::no_content, {}, keep, version);
         // The answer is held until written: it counts against the shared output budget.
         auto& buffered = self->st_->ctx.stats.buffered_bytes;
@@ -531,7 +579,7 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
   void write(std::shared_ptr<http::response<http::string_body>> res) {
     const auto bytes = res->body().size();
     st_->ctx.stats.buffered_bytes += bytes;
-    stream_.expires_after(limits_.write_timeout);
+    tcp_().expires_after(limits_.write_timeout);
     http::async_write(stream_, *res, [self = shared_from_this(), res, bytes](const error_code& ec, std::size_t) {
       self->st_->ctx.stats.buffered_bytes -= bytes;
       if (ec == beast::error::timeout) ++self->st_->ctx.stats.slow_readers;
@@ -540,13 +588,28 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
     });
   }
 
+  // An orderly end: over TLS a close_notify first (RFC 8446 §6.1), so that the peer knows the
+  // last response was whole; waited for at most write_timeout.
   void close() {
-    error_code ignored;
-    stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
-    stream_.close();
+    if constexpr (kTls) {
+      tcp_().expires_after(limits_.write_timeout);
+      stream_.async_shutdown([self = shared_from_this()](const error_code&) { self->close_now(); });
+    } else {
+      error_code ignored;
+      tcp_().socket().shutdown(tcp::socket::shutdown_send, ignored);
+      tcp_().close();
+    }
   }
 
-  beast::tcp_stream stream_;
+  static Principal as(Principal p, const char* transport) {
+    p.transport = transport;
+    return p;
+  }
+
+  Stream stream_;
+  asio::any_io_executor ex_;  // the stream's, still there once a WebSocket took the stream
+  bool upgraded_ = false;     // the stream went to a WebSocket session
+  std::optional<Principal> certified_;  // by a client certificate (https://)
   std::shared_ptr<HttpState> st_;
   Limits limits_;
   beast::flat_buffer buffer_;
@@ -555,7 +618,9 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession> {
   std::string cors_origin_;  // a listed Origin of the current request: CORS headers
 };
 
-class HttpListener final : public Listener, public std::enable_shared_from_this<HttpListener> {
+template <bool Tls>
+class HttpListener final : public Listener, public std::enable_shared_from_this<HttpListener<Tls>> {
+  using std::enable_shared_from_this<HttpListener<Tls>>::shared_from_this;
  public:
   HttpListener(asio::io_context& io, tcp::acceptor acceptor, std::string endpoint,
                std::shared_ptr<HttpState> st)
@@ -581,7 +646,13 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
         ++self->st_->connections;
         error_code ignored;
         s.set_option(tcp::no_delay(true), ignored);  // a response is one write; see ndjson.cpp
-        std::make_shared<HttpSession>(std::move(s), self->st_)->start();
+        if constexpr (Tls)
+          std::make_shared<HttpSession<beast::ssl_stream<beast::tcp_stream>>>(
+              beast::ssl_stream<beast::tcp_stream>(beast::tcp_stream(std::move(s)), *self->st_->ctx.tls->current()),
+              self->st_)
+              ->start();
+        else
+          std::make_shared<HttpSession<beast::tcp_stream>>(beast::tcp_stream(std::move(s)), self->st_)->start();
       }
       self->accept();
     });
@@ -604,7 +675,7 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
   }
 
   void end_sessions_of(const std::string& name) override {
-    std::vector<std::shared_ptr<WsSession>> live;
+    std::vector<std::shared_ptr<WsBase>> live;
     {
       std::lock_guard lock(st_->mu);
       for (auto& w : st_->ws)
@@ -641,8 +712,18 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
 std::shared_ptr<Listener> listen_http(asio::io_context& io, const std::string& host,
                                       std::uint16_t port, const Context& ctx) {
   auto [acceptor, name] = bind_tcp(io, "http", host, port);
-  auto l = std::make_shared<HttpListener>(io, std::move(acceptor), std::move(name),
-                                          std::make_shared<HttpState>(ctx));
+  auto l = std::make_shared<HttpListener<false>>(io, std::move(acceptor), std::move(name),
+                                                 std::make_shared<HttpState>(ctx, false));
+  l->accept();
+  return l;
+}
+
+std::shared_ptr<Listener> listen_https(asio::io_context& io, const std::string& host,
+                                       std::uint16_t port, const Context& ctx) {
+  if (!ctx.tls) throw Error::invalid("server.tls.cert", "an https:// listener needs [server.tls] cert and key");
+  auto [acceptor, name] = bind_tcp(io, "https", host, port);
+  auto l = std::make_shared<HttpListener<true>>(io, std::move(acceptor), std::move(name),
+                                                std::make_shared<HttpState>(ctx, true));
   l->accept();
   return l;
 }

@@ -1,4 +1,4 @@
-// NDJSON transports over a Unix socket and TCP (Boost.Asio), see net.hpp.
+// NDJSON transports over a Unix socket, TCP and TLS (Boost.Asio), see net.hpp.
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/types.h>
@@ -21,16 +21,20 @@
 #include <boost/asio/steady_timer.hpp>
 #include <boost/asio/strand.hpp>
 #include <boost/asio/write.hpp>
+#include <boost/beast/core/stream_traits.hpp>
+#include <boost/beast/ssl.hpp>
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "gonio/daemon/net/net.hpp"
 #include "net/accept.hpp"
 #include "net/session.hpp"
+#include "net/tls.hpp"
 
 namespace gonio::daemon::net {
 
 namespace asio = boost::asio;
+namespace beast = boost::beast;
 using boost::system::error_code;
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
@@ -40,7 +44,7 @@ namespace {
 // What the sessions of one listener share with it.
 struct ListenerState {
   Context ctx;
-  std::string kind;  // "unix", "tcp"
+  std::string kind;  // "unix", "tcp", "tls"
   std::atomic<std::size_t> connections{0}, accepted{0}, dropped{0};
   std::atomic<std::size_t> ending{0};  // sessions close() asked to end that have not yet
   std::mutex mu;
@@ -48,14 +52,21 @@ struct ListenerState {
   explicit ListenerState(const Context& c, std::string k) : ctx(c), kind(std::move(k)) {}
 };
 
-template <class Protocol>
+// The stream a session reads and writes: the socket, or TLS over it. Beast's ssl_stream
+// rather than Asio's: it gathers a write's buffers (a message and its newline) into one TLS
+// record where Asio's would send one record per buffer.
+template <class Protocol, bool Tls>
+using StreamOf = std::conditional_t<Tls, beast::ssl_stream<typename Protocol::socket>, typename Protocol::socket>;
+
+template <class Protocol, bool Tls = false>
 class NdjsonSession final : public rpc::Session,
-                            public std::enable_shared_from_this<NdjsonSession<Protocol>> {
+                            public std::enable_shared_from_this<NdjsonSession<Protocol, Tls>> {
  public:
+  using Stream = StreamOf<Protocol, Tls>;
   using Socket = typename Protocol::socket;
 
-  NdjsonSession(Socket socket, std::string peer, std::shared_ptr<ListenerState> ls)
-      : rpc::Session(ls->kind, std::move(peer), true), socket_(std::move(socket)),
+  NdjsonSession(Stream stream, std::string peer, std::shared_ptr<ListenerState> ls)
+      : rpc::Session(ls->kind, std::move(peer), true), socket_(std::move(stream)),
         timer_(socket_.get_executor()), login_timer_(socket_.get_executor()), ls_(std::move(ls)),
         limits_(ls_->ctx.limits), stats_(ls_->ctx.stats), out_(limits_, stats_, 1),
         write_deadline_(socket_.get_executor(), limits_.write_timeout) {}
@@ -66,6 +77,34 @@ class NdjsonSession final : public rpc::Session,
   }
 
   void start() {
+    if constexpr (Tls) {
+      // The handshake has read_timeout to finish, as any started message; until then the
+      // peer is in no hub, has no role and is owed nothing.
+      timer_.expires_after(limits_.read_timeout);
+      timer_.async_wait([self = this->shared_from_this()](const error_code& ec) {
+        if (ec || self->closed_ || self->handshaken_) return;
+        self->close(fmt::format("TLS handshake did not complete within {} s",
+                                std::chrono::duration<double>(self->limits_.read_timeout).count()));
+      });
+      socket_.async_handshake(asio::ssl::stream_base::server, [self = this->shared_from_this()](const error_code& ec) {
+        if (self->closed_) return;
+        if (ec) {
+          self->close("TLS handshake failed: " + ec.message());
+          return;
+        }
+        self->handshaken_ = true;
+        self->timer_.cancel();
+        if (auto p = certificate_principal(self->socket_.native_handle(), self->ls_->ctx.auth, self->ls_->kind))
+          self->set_principal(*p);
+        self->begin();
+      });
+      return;
+    }
+    begin();
+  }
+
+ private:
+  void begin() {
     last_activity_ = Clock::now();
     if (principal().role == Role::none) {
       // A peer without a role can only log in: it gets login_timeout to do so.
@@ -81,6 +120,7 @@ class NdjsonSession final : public rpc::Session,
     do_read();
   }
 
+ public:
   bool push(std::shared_ptr<const std::string> message) override {
     if (closing_.load()) return false;
     if (!out_.admit(*message)) {
@@ -348,8 +388,10 @@ class NdjsonSession final : public rpc::Session,
     timer_.cancel();
     write_deadline_.cancel();
     login_timer_.cancel();
-    socket_.shutdown(Socket::shutdown_both, ignored);
-    socket_.close(ignored);
+    // Over TLS too: the socket is closed without a close_notify, which a peer that stopped
+    // reading would never take.
+    beast::get_lowest_layer(socket_).shutdown(Socket::shutdown_both, ignored);
+    beast::get_lowest_layer(socket_).close(ignored);
     ls_->ctx.hub.remove(id());
     // What is queued is freed now, not when the last handler lets go of the session.
     if (!writing_) out_.pop(out_.size());
@@ -358,7 +400,7 @@ class NdjsonSession final : public rpc::Session,
     account_input();
   }
 
-  Socket socket_;
+  Stream socket_;
   asio::steady_timer timer_, login_timer_;
   std::shared_ptr<ListenerState> ls_;
   Limits limits_;
@@ -370,6 +412,7 @@ class NdjsonSession final : public rpc::Session,
   std::size_t writing_count_ = 0;  // messages at the front of out_ being written
   std::atomic<bool> closing_{false};
   bool reading_ = false, writing_ = false, closed_ = false, close_after_write_ = false;
+  bool handshaken_ = false;  // TLS
   std::size_t in_flight_ = 0;
   std::size_t input_accounted_ = 0;  // bytes of buffer_ counted in stats_.buffered_bytes
   Clock::time_point partial_since_, last_activity_, deadline_;
@@ -378,9 +421,9 @@ class NdjsonSession final : public rpc::Session,
   std::uint64_t wait_generation_ = 0;
 };
 
-template <class Protocol>
+template <class Protocol, bool Tls = false>
 class NdjsonListener final : public Listener,
-                             public std::enable_shared_from_this<NdjsonListener<Protocol>> {
+                             public std::enable_shared_from_this<NdjsonListener<Protocol, Tls>> {
  public:
   using Acceptor = typename Protocol::acceptor;
 
@@ -416,7 +459,7 @@ class NdjsonListener final : public Listener,
       const auto p = s->principal();
       if (p.role == Role::none || p.name != name) continue;
       ++ls_->ctx.stats.revoked_sessions;
-      std::static_pointer_cast<NdjsonSession<Protocol>>(s)->end(
+      std::static_pointer_cast<NdjsonSession<Protocol, Tls>>(s)->end(
           fmt::format("the token '{}' was revoked", name));
     }
   }
@@ -435,7 +478,7 @@ class NdjsonListener final : public Listener,
       sessions.swap(ls_->sessions);
     }
     for (auto& w : sessions)
-      if (auto s = w.lock()) std::static_pointer_cast<NdjsonSession<Protocol>>(s)->shutdown();
+      if (auto s = w.lock()) std::static_pointer_cast<NdjsonSession<Protocol, Tls>>(s)->shutdown();
   }
 
   bool closing() const override { return ls_->ending.load() > 0; }
@@ -452,6 +495,11 @@ class NdjsonListener final : public Listener,
     ++ls_->accepted;
     if (ls_->connections.load() >= ls_->ctx.limits.max_connections) {
       ++ls_->dropped;
+      if constexpr (Tls) {  // no handshake, no words: the peer sees the connection closed
+        error_code ignored;
+        socket.close(ignored);
+        return;
+      }
       const auto msg = std::make_shared<std::string>(
           json{{"jsonrpc", "2.0"},
                {"error", rpc::error_object(rpc::code::overloaded,
@@ -499,7 +547,12 @@ class NdjsonListener final : public Listener,
       principal.name = "anonymous";
       principal.role = Role::none;
     }
-    auto session = std::make_shared<NdjsonSession<Protocol>>(std::move(socket), peer, ls_);
+    std::shared_ptr<NdjsonSession<Protocol, Tls>> session;
+    if constexpr (Tls)
+      session = std::make_shared<NdjsonSession<Protocol, Tls>>(
+          StreamOf<Protocol, Tls>(std::move(socket), *ls_->ctx.tls->current()), peer, ls_);
+    else
+      session = std::make_shared<NdjsonSession<Protocol, Tls>>(std::move(socket), peer, ls_);
     session->set_principal(principal);
     {
       std::lock_guard lock(ls_->mu);
@@ -545,6 +598,16 @@ std::shared_ptr<Listener> listen_tcp(asio::io_context& io, const std::string& ho
   auto [acceptor, name] = bind_tcp(io, "tcp", host, port);
   auto ls = std::make_shared<ListenerState>(ctx, "tcp");
   auto l = std::make_shared<NdjsonListener<asio::ip::tcp>>(io, std::move(acceptor), name, ls);
+  l->accept();
+  return l;
+}
+
+std::shared_ptr<Listener> listen_tls(asio::io_context& io, const std::string& host,
+                                     std::uint16_t port, const Context& ctx) {
+  if (!ctx.tls) throw Error::invalid("server.tls.cert", "a tls:// listener needs [server.tls] cert and key");
+  auto [acceptor, name] = bind_tcp(io, "tls", host, port);
+  auto ls = std::make_shared<ListenerState>(ctx, "tls");
+  auto l = std::make_shared<NdjsonListener<asio::ip::tcp, true>>(io, std::move(acceptor), name, ls);
   l->accept();
   return l;
 }

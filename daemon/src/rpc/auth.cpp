@@ -109,6 +109,15 @@ std::optional<Principal> Auth::authenticate(std::string_view token,
   return Principal{match->name, match->role, std::string(transport)};
 }
 
+std::optional<Principal> Auth::named(std::string_view name, std::string_view transport) const {
+  std::lock_guard lock(mu_);
+  const auto same = [&](const TokenEntry& e) { return e.name == name; };
+  for (const auto* list : {&configured_, &stored_})
+    if (const auto it = std::ranges::find_if(*list, same); it != list->end())
+      return Principal{it->name, it->role, std::string(transport)};
+  return std::nullopt;
+}
+
 bool Auth::ensure_admin_token(const std::filesystem::path& file) {
   for (const auto& e : configured_)
     if (e.role == Role::admin) return false;

@@ -297,6 +297,8 @@ void open_listeners(asio::io_context& io, const Config& config, const fs::path& 
       case ListenUri::Kind::unix_socket: listeners.push_back(net::listen_unix(io, u.path, ctx)); break;
       case ListenUri::Kind::tcp: listeners.push_back(net::listen_tcp(io, u.host, u.port, ctx)); break;
       case ListenUri::Kind::http: listeners.push_back(net::listen_http(io, u.host, u.port, ctx)); break;
+      case ListenUri::Kind::tls: listeners.push_back(net::listen_tls(io, u.host, u.port, ctx)); break;
+      case ListenUri::Kind::https: listeners.push_back(net::listen_https(io, u.host, u.port, ctx)); break;
     }
     spdlog::info("listening on {}", listeners.back()->endpoint());
   }
@@ -396,6 +398,37 @@ class StopOnSignal {
   std::thread stopper_;
 };
 
+// SIGHUP: the TLS listeners' certificate and key are read again (a renewed certificate put
+// in place of the old one). New handshakes use them; connections already up keep theirs. A
+// file that does not pass the checks of --check-config is logged and the old ones stay.
+class ReloadOnSignal {
+ public:
+  ReloadOnSignal(asio::io_context& io, std::shared_ptr<net::TlsServer> tls) : signals_(io, SIGHUP), tls_(std::move(tls)) {
+    wait();
+  }
+
+ private:
+  void wait() {
+    signals_.async_wait([this](const boost::system::error_code& ec, int) {
+      if (ec) return;
+      if (!tls_) {
+        spdlog::info("SIGHUP: nothing to reload (no [server.tls])");
+      } else {
+        try {
+          net::reload_tls(*tls_);
+          spdlog::info("SIGHUP: reloaded the TLS certificate and key; new connections use them");
+        } catch (const Error& e) {
+          spdlog::error("SIGHUP: kept the TLS certificate in use: {}", e.what());
+        }
+      }
+      wait();
+    });
+  }
+
+  asio::signal_set signals_;
+  std::shared_ptr<net::TlsServer> tls_;
+};
+
 // The network threads: `main` (listeners, signals, timers, the webhook) and, with
 // server.io_threads = N > 1, N - 1 io_contexts more, one thread each. Each connection is
 // given to one of them in turn and stays there, so its handlers run one at a time on one
@@ -457,6 +490,7 @@ int check_config(const DaemonOptions& o, std::ostream& out, std::ostream& err) {
     } catch (const Error& e) {
       throw json_util::prefixed(e, "instrument.profile");
     }
+    net::check_tls_files(config.tls);
     drivers::InstrumentCheck inst;
     try {
       inst = drivers::check_instrument(json{{"motion", config.motion}, {"photometer", config.photometer}},
@@ -478,6 +512,7 @@ int check_config(const DaemonOptions& o, std::ostream& out, std::ostream& err) {
     if (devices.empty()) out << "# devices: none (no hardware)\n";
     for (const auto& d : devices)
       out << fmt::format("# device instrument.{} = {}: {}\n", d.field, d.address, device_state(d));
+    if (!config.tls.cert.empty()) out << "# server.tls: the certificate and key are readable, match and are valid now\n";
     return exit_code::ok;
   } catch (const Error& e) {
     err << fmt::format("goniod: {}: {}\n", source, e.what());
@@ -498,6 +533,7 @@ int run_daemon(const DaemonOptions& o) {
   try {
     config = load_config(o);
     setup_logging(config.log_level);
+    net::check_tls_files(config.tls);  // before the state directory is touched
   } catch (const Error& e) {
     fmt::print(stderr, "goniod: {}\n", e.what());
     return exit_code::usage;
@@ -582,7 +618,8 @@ int run_daemon(const DaemonOptions& o) {
     const net::Context ctx{dispatcher, hub,
                            auth,       net::Limits::from(config),
                            net_stats,  load_dashboard(config),
-                           [&io_threads] { return io_threads.next(); }};
+                           [&io_threads] { return io_threads.next(); },
+                           net::make_tls_server(config)};
     try {
       open_listeners(io, config, state, ctx, listeners);
     } catch (const Error& e) {
@@ -618,6 +655,7 @@ int run_daemon(const DaemonOptions& o) {
 
     // ---- signals, systemd
     StopOnSignal stop(io, listeners, instrument);
+    ReloadOnSignal reload(io, ctx.tls);
     std::signal(SIGPIPE, SIG_IGN);
     Watchdog watchdog(io, config, instrument);
     watchdog.start();

@@ -41,18 +41,20 @@ constexpr const auto& enum_names(Role) { return kRoleNames; }  // proto/enum_tex
 // "viewer" | "technician" | "admin"; throws Error naming `field`.
 Role parse_role(std::string_view text, std::string_view field = "role");
 
-// Where goniod listens: unix:PATH, tcp://HOST:PORT (NDJSON), http://HOST:PORT (HTTP + WS).
+// Where goniod listens: unix:PATH, tcp://HOST:PORT (NDJSON), http://HOST:PORT (HTTP + WS),
+// and the same two over TLS: tls://HOST:PORT, https://HOST:PORT (HTTPS + WSS).
 struct ListenUri {
-  enum class Kind { unix_socket, tcp, http };
+  enum class Kind { unix_socket, tcp, http, tls, https };
   Kind kind = Kind::unix_socket;
   std::string path;  // unix
-  std::string host;  // tcp, http: a literal IPv4/IPv6 address or "localhost"
+  std::string host;  // tcp, http, tls, https: a literal IPv4/IPv6 address or "localhost"
   std::uint16_t port = 0;  // 0: an ephemeral port (logged and written to <state-dir>/ports.json)
 
   // Throws Error(invalid_argument) naming `field`.
   static ListenUri parse(std::string_view text, std::string_view field = "listen");
   std::string to_string() const;
   bool loopback() const;  // host is 127.0.0.0/8, ::1 or localhost (always true for unix)
+  bool tls() const { return kind == Kind::tls || kind == Kind::https; }
 };
 
 // The MQTT broker of [mqtt] url: mqtt://HOST:PORT (plain, port 1883 when left out) or
@@ -123,6 +125,12 @@ struct Config {
   // 0: not governed.
   double client_share_busy = 0.05;
   std::string log_level = "info";
+  // [server.tls]: the certificate (PEM, the chain after it) and key of the tls:// and
+  // https:// listeners, re-read on SIGHUP; client_ca: client certificates are asked for and
+  // verified against it, and one whose subject CN names a token gets that token's role.
+  struct Tls {
+    std::string cert, key, client_ca;
+  } tls;
 
   // [auth]
   std::vector<TokenEntry> tokens;  // [[auth.token]] name, role, sha256

@@ -1,5 +1,6 @@
-// A blocking JSON-RPC client over the NDJSON transports (unix:PATH, tcp://HOST:PORT), for
-// gonioctl and gonio-load. Plain POSIX sockets: a command-line client needs no event loop.
+// A blocking JSON-RPC client over the NDJSON transports (unix:PATH, tcp://HOST:PORT and
+// tls://HOST:PORT), for gonioctl and gonio-load. Plain POSIX sockets, and OpenSSL over them
+// for tls://: a command-line client needs no event loop.
 //
 // Notifications that arrive while waiting for a response are kept, in order, for
 // next_notification().
@@ -14,6 +15,9 @@
 #include <string_view>
 
 #include <nlohmann/json.hpp>
+
+struct ssl_st;
+struct ssl_ctx_st;
 
 namespace gonio::daemon {
 
@@ -38,8 +42,10 @@ class ConnectionError : public std::runtime_error {
 
 class Client {
  public:
-  // Throws ConnectionError.
-  Client(const std::string& uri, std::chrono::milliseconds timeout = std::chrono::seconds(30));
+  // Throws ConnectionError. tls://: the server's certificate must be signed by a CA of `ca`
+  // (a PEM file; empty: the system's) and name the host of the URI.
+  Client(const std::string& uri, std::chrono::milliseconds timeout = std::chrono::seconds(30),
+         const std::string& ca = {});
   ~Client();
   Client(Client&& other) noexcept;
   Client& operator=(Client&&) = delete;
@@ -69,6 +75,11 @@ class Client {
 
  private:
   void send_all(std::string_view data);
+  void start_tls(const std::string& ca);
+  // Some bytes into `buf` (at most `size`) once poll said the socket is readable: > 0 read,
+  // 0 nothing yet (TLS records that held no data), throws when the connection ended.
+  long receive(char* buf, std::size_t size);
+  void close_connection() noexcept;
   std::int64_t send_request(const std::string& method, const nlohmann::json& params);
   // The answer to `id`: kept notifications and answers to something else are passed over;
   // an error throws RpcError. `full` parses the answer into `msg` (else it is only checked).
@@ -77,6 +88,8 @@ class Client {
   std::optional<std::string_view> next_line(std::chrono::milliseconds timeout);
 
   int fd_ = -1;
+  ssl_ctx_st* tls_ctx_ = nullptr;  // tls://
+  ssl_st* tls_ = nullptr;
   std::string uri_;
   std::chrono::milliseconds timeout_;
   // Received bytes; those before consumed_ are lines already returned. Kept (with its
@@ -88,7 +101,8 @@ class Client {
   std::int64_t next_id_ = 1;
 };
 
-// unix:PATH / tcp://HOST:PORT → a connected socket fd; throws ConnectionError.
+// unix:PATH / tcp://HOST:PORT / tls://HOST:PORT → a connected socket fd (TCP for tls://);
+// throws ConnectionError.
 int connect_uri(const std::string& uri, std::chrono::milliseconds timeout);
 
 }  // namespace gonio::daemon

@@ -11,6 +11,12 @@
 //                      GET /ws (WebSocket, text frames, one message per frame; the bearer
 //                      header at the upgrade or auth.login as the first call); GET and HEAD
 //                      of anything else: the dashboard's files (web_root.hpp).
+//   tls://HOST:PORT    NDJSON over TLS, and
+//   https://HOST:PORT  HTTP and WebSocket (wss://) over TLS: as tcp:// and http:// once the
+//                      handshake is done ([server.tls], src/net/tls.hpp). The handshake
+//                      must finish within read_timeout; until then a connection has no
+//                      session, no role and no buffers but OpenSSL's. A verified client
+//                      certificate whose CN names a token logs the peer in as that token.
 //
 // Every connection: a size limit per message (the connection is told -32600 and closed),
 // a read timeout for a started message (stalled peers are dropped), an optional idle
@@ -85,6 +91,8 @@ struct NetStats {
   void write(JsonWriter& w) const;  // the members of system.info's "net"
 };
 
+class TlsServer;  // src/net/tls.hpp
+
 struct Context {
   const rpc::Dispatcher& dispatcher;
   Hub& hub;
@@ -95,6 +103,8 @@ struct Context {
   // The executor each new connection runs on (goniod: one of its io threads' own
   // io_contexts, in turn). Unset: a strand of the listener's io_context.
   std::function<boost::asio::any_io_executor()> connection_executor;
+  // The certificate of the tls:// and https:// listeners; null without [server.tls].
+  std::shared_ptr<TlsServer> tls;
 };
 
 class Listener {
@@ -120,6 +130,22 @@ std::shared_ptr<Listener> listen_tcp(boost::asio::io_context& io, const std::str
                                      std::uint16_t port, const Context& ctx);
 std::shared_ptr<Listener> listen_http(boost::asio::io_context& io, const std::string& host,
                                       std::uint16_t port, const Context& ctx);
+
+// Over TLS (ctx.tls must be set).
+std::shared_ptr<Listener> listen_tls(boost::asio::io_context& io, const std::string& host,
+                                     std::uint16_t port, const Context& ctx);
+std::shared_ptr<Listener> listen_https(boost::asio::io_context& io, const std::string& host,
+                                       std::uint16_t port, const Context& ctx);
+
+// [server.tls]: the files exist and can be read, the key is its owner's alone and is the
+// certificate's, the certificate is valid now. Throws Error naming the key
+// (server.tls.cert, .key, .client_ca); nothing when [server.tls] is not set.
+void check_tls_files(const Config::Tls& tls);
+// The context of [server.tls] (checked as above), null when it is not set.
+std::shared_ptr<TlsServer> make_tls_server(const Config& config);
+// SIGHUP: the files read again for new handshakes; throws Error as above, and the
+// certificate in use stays.
+void reload_tls(TlsServer& tls);
 
 // The alert webhook: POSTs each payload as JSON to `url` with retries and back-off.
 std::shared_ptr<AlertSink> make_webhook(boost::asio::io_context& io, const Config& config);

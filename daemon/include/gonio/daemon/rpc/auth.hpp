@@ -38,6 +38,9 @@ class Auth {
 
   // The principal for a bearer token, nullopt when no hash matches.
   std::optional<Principal> authenticate(std::string_view token, std::string_view transport) const;
+  // The principal of the token called `name` (a verified client certificate's CN names it),
+  // nullopt when there is none.
+  std::optional<Principal> named(std::string_view name, std::string_view transport) const;
 
   // First start: when no admin token is configured or stored, creates one, stores its hash
   // and writes the token to `file` (mode 0600, owner only). Returns true when it wrote one.
