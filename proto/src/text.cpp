@@ -171,9 +171,10 @@ std::vector<std::string> near_matches(std::string_view word, const std::vector<s
     if (d <= limit) scored.emplace_back(d, c);
   }
   std::stable_sort(scored.begin(), scored.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  // Only the nearest: "scan.get" for "scan.gett", not also "scan.fit".
   std::vector<std::string> out;
   for (auto& s : scored) {
-    if (out.size() >= max) break;
+    if (out.size() >= max || s.first > scored.front().first) break;
     if (std::find(out.begin(), out.end(), s.second) == out.end()) out.push_back(std::move(s.second));
   }
   return out;

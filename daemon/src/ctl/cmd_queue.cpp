@@ -34,7 +34,7 @@ void add_queue_commands(CLI::App& app, Context& ctx) {
         json all = json::array();
         if (!r["running"].is_null()) all.push_back(r["running"]);
         for (const auto& w : r["waiting"]) all.push_back(w);
-        scans_table(all);
+        scans_table(all, sample_names(s));
       });
       return 0;
     };
@@ -45,7 +45,7 @@ void add_queue_commands(CLI::App& app, Context& ctx) {
   reorder->callback([&ctx, args] {
     ctx.action = [args](Session& s) {
       const auto r = s.call("queue.reorder", json{{"scan", args->scan}, {"position", args->position}});
-      print(s.options(), r, [&] { scans_table(r["waiting"]); });
+      print(s.options(), r, [&] { scans_table(r["waiting"], sample_names(s)); });
       return 0;
     };
   });

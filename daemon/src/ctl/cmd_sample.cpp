@@ -27,6 +27,15 @@ json sample_ref(const std::string& text) {
   return id ? json(std::stoll(text)) : json(text);
 }
 
+std::map<std::int64_t, std::string> sample_names(Session& s) {
+  std::map<std::int64_t, std::string> names;
+  for (std::size_t offset = 0;; offset += 1000) {
+    const auto page = s.call("sample.list", json{{"offset", offset}, {"limit", 1000}});
+    for (const auto& x : page) names[x["id"].get<std::int64_t>()] = x.value("name", std::string());
+    if (page.size() < 1000) return names;
+  }
+}
+
 void add_sample_commands(CLI::App& app, Context& ctx) {
   auto args = std::make_shared<SampleArgs>();
   auto* sample = app.add_subcommand("sample", "the sample catalog");

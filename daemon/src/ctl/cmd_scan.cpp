@@ -3,7 +3,9 @@
 #include <cstdint>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,6 +15,7 @@
 #include "ctl/ctl_internal.hpp"
 #include "gonio/daemon/ctl/ctl.hpp"
 #include "gonio/proto/error.hpp"
+#include "gonio/proto/text.hpp"
 
 namespace gonio::daemon::ctl {
 
@@ -20,15 +23,30 @@ using nlohmann::json;
 
 namespace {
 
-void points_table(const json& points) {
+// The channel at `nm` (within half a nanometre); an error naming the scan's grid otherwise.
+std::size_t channel_at(const json& wl, double nm) {
+  std::size_t c = 0;
+  for (std::size_t i = 0; i < wl.size(); ++i)
+    if (std::abs(wl[i].get<double>() - nm) < std::abs(wl[c].get<double>() - nm)) c = i;
+  if (wl.empty() || std::abs(wl[c].get<double>() - nm) > 0.5)
+    throw Error::invalid("--wavelength", fmt::format("no channel at {:g} nm; the scan measured {} nm", nm,
+                                                     text::format_value_list(wl.get<std::vector<double>>())));
+  return c;
+}
+
+// One channel stands for the spectrum in a table: `nm` (550 nm by default, else the nearest).
+void points_table(const json& points, std::optional<double> nm) {
   Table t({"index", "θi", "θr", "λ(nm)", "measured", "±u", "predicted", "±se", "max|z|", "ΔE00", "flags"});
   for (const auto& p : points) {
     const auto& m = p["measured"];
     const auto& wl = m["wavelengths_nm"];
-    // The channel nearest 550 nm stands for the spectrum in a table.
     std::size_t c = 0;
-    for (std::size_t i = 0; i < wl.size(); ++i)
-      if (std::abs(wl[i].get<double>() - 550) < std::abs(wl[c].get<double>() - 550)) c = i;
+    if (nm) {
+      c = channel_at(wl, *nm);
+    } else {
+      for (std::size_t i = 0; i < wl.size(); ++i)
+        if (std::abs(wl[i].get<double>() - 550) < std::abs(wl[c].get<double>() - 550)) c = i;
+    }
     const auto& pr = p["predicted"];
     std::string flags;
     if (p["diverged"].get<bool>()) flags = "DIVERGED";
@@ -46,13 +64,19 @@ void points_table(const json& points) {
   std::cout << t.render();
 }
 
-void scan_human(const json& s) {
+// A scan for people: its sample by name (when known), the wavelength grid as 400:700:10,
+// and with `alerts` (scan get) the verdict and the scan's alerts.
+void scan_human(const json& s, const std::string& sample_name = {}, const ScanAlerts* alerts = nullptr) {
   std::cout << fmt::format("scan {}: {}{}\n", cell(s["id"]), cell(s["state"]),
                            s["reason"].get<std::string>().empty() ? "" : " (" + cell(s["reason"]) + ")");
-  std::cout << fmt::format("  sample {}  points {}/{}  diverged {}  priority {}\n", cell(s["plan"]["sample"]),
+  const auto sample = sample_name.empty() ? cell(s["plan"]["sample"])
+                                          : fmt::format("{} ({})", sample_name, cell(s["plan"]["sample"]));
+  std::cout << fmt::format("  sample {}  points {}/{}  diverged {}  priority {}\n", sample,
                            cell(s["points_done"]), cell(s["points_total"]), cell(s["points_diverged"]),
                            cell(s["plan"]["priority"]));
-  std::cout << fmt::format("  wavelengths {}  repeats {}  reference {}\n", cell(s["plan"]["wavelengths"]),
+  const auto& wl = s["plan"]["wavelengths"];
+  std::cout << fmt::format("  wavelengths {} nm  repeats {}  reference {}\n",
+                           wl.is_array() ? text::format_value_list(wl.get<std::vector<double>>()) : cell(wl),
                            cell(s["plan"]["repeats"]), cell(s["plan"]["reference"]["mode"]));
   std::cout << fmt::format("  submitted {} by {}  started {}  finished {}\n", cell(s["submitted_at"]),
                            cell(s["submitted_by"]), cell(s["started_at"]), cell(s["finished_at"]));
@@ -66,19 +90,34 @@ void scan_human(const json& s) {
     std::cout << "\n";
     for (const auto& p : a.value("parameters", json::array())) {
       const double v = p["value"].get<double>(), u = p["u"].get<double>();
-      std::cout << fmt::format("    {} = {:.6g} ± {:.2g} ({:.2f} %)\n", cell(p["name"]), v, u,
+      std::cout << fmt::format("    {} = {} ({:.2g} %)\n", cell(p["name"]), text::format_measured(v, u),
                                100 * u / std::max(std::abs(v), 1e-300));
     }
     for (const auto& w : a.value("warnings", json::array())) std::cout << "    warning: " << cell(w) << "\n";
   }
   if (s.contains("note")) std::cout << "  " << cell(s["note"]) << "\n";
+  if (alerts) {
+    // Indented under the scan, like its other lines.
+    std::string text = verdict_text(s.value("verdict", json())) + alerts_text(*alerts, s["id"].get<std::int64_t>());
+    for (std::size_t at = 0; at < text.size(); at = text.find('\n', at) + 1) text.insert(at, "  ");
+    std::cout << text;
+  }
+}
+
+std::string sample_name_of(Session& session, const json& scan) {
+  try {
+    return session.call("sample.get", json{{"sample", scan["plan"]["sample"]}}).value("name", std::string());
+  } catch (const RpcError&) {
+    return {};  // a sample since deleted: its id alone
+  }
 }
 
 struct ScanArgs {
   std::string sample, name, wavelengths = "400:700:10", reference = "every_point", not_before, state;
   std::vector<std::string> geometries, grids;
   int repeats = 1, reference_interval = 10, priority = 0;
-  bool watch = false;
+  bool watch = false, exit_status = false;
+  std::optional<double> wavelength;  // scan points
   std::int64_t id = 0;
   std::string reason;
   std::string since, until, text;  // scan list
@@ -155,13 +194,16 @@ void fit_human(const json& f) {
   for (const auto& w : r["warnings"]) std::cout << "  warning: " << cell(w) << "\n";
 }
 
-void scans_table(const json& list) {
+void scans_table(const json& list, const std::map<std::int64_t, std::string>& names) {
   Table t({"id", "state", "sample", "points", "diverged", "priority", "submitted", "reason"});
-  for (const auto& s : list)
-    t.add({cell(s["id"]), cell(s["state"]), cell(s["plan"]["sample"]),
+  for (const auto& s : list) {
+    const auto& id = s["plan"]["sample"];
+    const auto it = id.is_number_integer() ? names.find(id.get<std::int64_t>()) : names.end();
+    t.add({cell(s["id"]), cell(s["state"]), it == names.end() ? cell(id) : it->second,
            fmt::format("{}/{}", cell(s["points_done"]), cell(s["points_total"])),
            cell(s["points_diverged"]), cell(s["plan"]["priority"]), cell(s["submitted_at"]),
            cell(s["reason"])});
+  }
   std::cout << t.render();
 }
 
@@ -189,7 +231,10 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
   submit->add_option("--tolerance", a->tolerance, "--adaptive curve: stop at this relative error")
       ->capture_default_str();
   submit->add_option("--max-points", a->max_points, "--adaptive: at most this many points")->capture_default_str();
-  submit->add_flag("--watch", a->watch, "follow the scan until it ends");
+  auto* watch_flag = submit->add_flag("--watch", a->watch, "follow the scan until it ends, then print its verdict");
+  submit->add_flag("--exit-status", a->exit_status,
+                   "with --watch: exit 10 when the verdict is out_of_tolerance, 11 when instrument_out_of_spec")
+      ->needs(watch_flag);
   submit->callback([&ctx, a] {
     ctx.action = [a](Session& s) {
       json p{{"sample", sample_ref(a->sample)},
@@ -212,8 +257,8 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
         p["adaptive"] = std::move(ad);
       }
       const auto r = s.call("scan.submit", p);
-      print(s.options(), r, [&] { scan_human(r); });
-      if (a->watch) return watch_scan(s, r["id"].get<std::int64_t>(), s.options().json);
+      print(s.options(), r, [&] { scan_human(r, sample_name_of(s, r)); });
+      if (a->watch) return watch_scan(s, r["id"].get<std::int64_t>(), s.options().json, a->exit_status);
       return 0;
     };
   });
@@ -223,11 +268,17 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
     c->add_option("scan", a->id, "scan id")->required();
     return c;
   };
-  id_cmd("get", "one scan")->callback([&ctx, a] {
+  auto* get = id_cmd("get", "one scan, its verdict and alerts");
+  get->add_flag("--exit-status", a->exit_status,
+                "exit 10 when the verdict is out_of_tolerance, 11 when instrument_out_of_spec");
+  get->callback([&ctx, a] {
     ctx.action = [a](Session& s) {
       const auto r = s.call("scan.get", json{{"scan", a->id}});
-      print(s.options(), r, [&] { scan_human(r); });
-      return 0;
+      print(s.options(), r, [&] {
+        const auto alerts = scan_alerts(s, a->id);
+        scan_human(r, sample_name_of(s, r), &alerts);
+      });
+      return a->exit_status ? verdict_exit_code(r) : 0;
     };
   });
   auto* slist = scan->add_subcommand("list", "recent scans");
@@ -245,7 +296,7 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
       if (!a->until.empty()) p["until"] = a->until;
       if (!a->text.empty()) p["text"] = a->text;
       const auto r = s.call("scan.list", p);
-      print(s.options(), r, [&] { scans_table(r); });
+      print(s.options(), r, [&] { scans_table(r, sample_names(s)); });
       return 0;
     };
   });
@@ -265,11 +316,12 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
   auto* pts = id_cmd("points", "measured and predicted points (paged)");
   pts->add_option("--offset", a->offset);
   pts->add_option("--limit", a->limit);
+  pts->add_option("--wavelength", a->wavelength, "the channel to show, nm (default: the one nearest 550 nm)");
   pts->callback([&ctx, a] {
     ctx.action = [a](Session& s) {
       const auto r = s.call("scan.points", json{{"scan", a->id}, {"offset", a->offset}, {"limit", a->limit}});
       print(s.options(), r, [&] {
-        points_table(r["points"]);
+        points_table(r["points"], a->wavelength);
         if (!r["next_offset"].is_null())
           std::cout << fmt::format("(more: --offset {})\n", cell(r["next_offset"]));
       });
@@ -318,8 +370,11 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
     };
   });
   add_material_command(scan, ctx, a);
-  id_cmd("watch", "follow a scan live until it ends")->callback([&ctx, a] {
-    ctx.action = [a](Session& s) { return watch_scan(s, a->id, s.options().json); };
+  auto* watch = id_cmd("watch", "follow a scan live until it ends, then print its verdict");
+  watch->add_flag("--exit-status", a->exit_status,
+                  "exit 10 when the verdict is out_of_tolerance, 11 when instrument_out_of_spec");
+  watch->callback([&ctx, a] {
+    ctx.action = [a](Session& s) { return watch_scan(s, a->id, s.options().json, a->exit_status); };
   });
 }
 

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <iosfwd>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -68,8 +69,10 @@ void add_demo_commands(CLI::App& app, Context& ctx);        // demo
 
 // A sample given on the command line: all digits is an id, anything else a name.
 nlohmann::json sample_ref(const std::string& text);
-// The table of scans that `scan list` and `queue status` print.
-void scans_table(const nlohmann::json& list);
+// Every sample's name by id (sample.list), for tables that show samples.
+std::map<std::int64_t, std::string> sample_names(Session& s);
+// The table of scans that `scan list` and `queue status` print, samples by name.
+void scans_table(const nlohmann::json& list, const std::map<std::int64_t, std::string>& names = {});
 // A stored fit (scan.fit, instrument.calibrate): parameters, χ², naive fit, warnings.
 void fit_human(const nlohmann::json& fit);
 
@@ -78,10 +81,25 @@ void print(const Options& o, const nlohmann::json& result, const std::function<v
 // key: value lines of an object (nested objects flattened with dots).
 void print_fields(const nlohmann::json& obj, const std::string& prefix = {});
 
-// Follows a scan until it completes, fails, is cancelled or paused. Returns the exit code
-// (0 completed, 9 otherwise). Draws a progress bar on a terminal, a line per 10 % elsewhere;
-// NDJSON of every notification with --json.
-int watch_scan(Session& s, std::int64_t scan, bool json_lines);
+// The verdict's lines: decision and points, the named cause with its value and what the
+// catalogue or data sheet says (or "unexplained" and the worst regions), the summary.
+std::string verdict_text(const nlohmann::json& verdict);
+// A scan's alerts (alert.list), counted: standing (of them critical) and resolved.
+struct ScanAlerts {
+  std::size_t standing = 0, critical = 0, resolved = 0;
+  nlohmann::json list;
+};
+ScanAlerts scan_alerts(Session& s, std::int64_t scan);
+std::string alerts_text(const ScanAlerts& a, std::int64_t scan);
+// --exit-status: ctl_exit::out_of_tolerance or instrument_out_of_spec by the verdict of a
+// scan.get result, else 0.
+int verdict_exit_code(const nlohmann::json& scan);
+
+// Follows a scan until it completes, fails, is cancelled or paused, then prints its
+// verdict and alerts. Returns the exit code: 9 when it ended other than completed; else 0,
+// or with `exit_status` the verdict's (verdict_exit_code). Draws a progress bar on a
+// terminal, a line per 10 % elsewhere; NDJSON of every notification with --json.
+int watch_scan(Session& s, std::int64_t scan, bool json_lines, bool exit_status = false);
 
 // The README's main job (see demo.cpp).
 struct DemoOptions {

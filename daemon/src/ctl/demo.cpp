@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -208,13 +209,29 @@ int run_demo(const DemoOptions& d, const Options& o) {
     std::cout << "\nmeasured vs predicted (θi = 45°):\n" << t.render();
     const auto alerts = s.call("alert.list", json{{"scan", id}, {"limit", 1000}});
     const auto verdict = s.call("scan.get", json{{"scan", id}})["verdict"];
+    const double tolerance = sample["tolerance"].get<double>();
     std::cout << fmt::format(
         "\ndivergence summary: {} of {} points out of tolerance (±{:g} %, k = {:g}), {} agree, {} "
         "undecided; worst |m − p|/u_c {:.2f} at θr = {:g}°; ΔE00 mean {:.2f}, worst {:.2f} at θr = {:g}°; "
-        "{} alert(s)\nverdict: {}\n",
-        n_div, points.size(), 100 * sample["tolerance"].get<double>(), coverage_k, n_agree, n_undecided,
-        z_worst, tr_z, n_de ? de_sum / static_cast<double>(n_de) : 0.0, de_worst, tr_de, alerts.size(),
-        verdict.is_object() ? verdict.value("summary", std::string()) : std::string("none"));
+        "{} alert(s)\n",
+        n_div, points.size(), 100 * tolerance, coverage_k, n_agree, n_undecided, z_worst, tr_z,
+        n_de ? de_sum / static_cast<double>(n_de) : 0.0, de_worst, tr_de, alerts.size())
+              << verdict_text(verdict);
+    // Points undecided and a scan that agrees are not a contradiction: say why.
+    const auto decision = verdict.is_object() ? verdict.value("decision", std::string()) : std::string();
+    if (n_undecided > 0 && decision == "agrees") {
+      std::vector<double> rel;
+      for (std::size_t i = 0; i < ym.size(); ++i)
+        if (std::isfinite(yp[i]) && yp[i] > 0) rel.push_back(std::hypot(um[i], up[i]) / yp[i]);
+      std::sort(rel.begin(), rel.end());
+      const double median = rel.empty() ? 0.0 : rel[rel.size() / 2];
+      std::cout << fmt::format(
+          "  why it agrees while {} points are undecided: a point agrees on its own only when its whole "
+          "interval m − p ± {:g}·u_c lies within ±{:g} %, and one point's u_c is about {:.2g} % of β "
+          "(median), so k·u_c alone nearly fills the tolerance; the verdict pools all {} points, whose mean "
+          "difference is known far better than any one point's (docs/decision-rule.md)\n",
+          n_undecided, coverage_k, 100 * tolerance, 100 * median, points.size());
+    }
     for (const auto& a : alerts)
       std::cout << fmt::format("  alert {} [{}] {} (×{})\n", cell(a["id"]), cell(a["severity"]),
                                cell(a["message"]), cell(a["count"]));

@@ -13,17 +13,17 @@ namespace gonio::daemon::ctl {
 using nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
-int watch_scan(Session& s, std::int64_t scan, bool json_lines) {
+int watch_scan(Session& s, std::int64_t scan, bool json_lines, bool exit_status) {
   auto& c = s.client();
   c.call("subscribe", json{{"topics", {"progress", "points", "alerts", "state"}}, {"scan", scan}});
   json sc = c.call("scan.get", json{{"scan", scan}});
   std::size_t done = sc["points_done"].get<std::size_t>(), total = sc["points_total"].get<std::size_t>();
-  std::size_t diverged = sc["points_diverged"].get<std::size_t>(), alerts = 0;
+  // The alerts standing when the watch begins (a finished scan has its own), then the new ones.
+  std::size_t diverged = sc["points_diverged"].get<std::size_t>(), alerts = scan_alerts(s, scan).standing;
   std::string state = sc["state"].get<std::string>(), reason = sc["reason"].get<std::string>();
   double eta = -1;
   const bool tty = ::isatty(STDOUT_FILENO) != 0;
   int last_decile = -1;
-  std::vector<std::string> alert_lines;
   const auto terminal = [](const std::string& st) {
     return st == "completed" || st == "failed" || st == "cancelled" || st == "paused";
   };
@@ -59,12 +59,8 @@ int watch_scan(Session& s, std::int64_t scan, bool json_lines) {
       } else if (method == "scan.state" && p.value("scan", std::int64_t{0}) == scan) {
         state = p["state"].get<std::string>();
         reason = p.value("reason", "");
-      } else if (method == "alert") {
-        if (p.value("count", 1) == 1) {
-          ++alerts;
-          alert_lines.push_back(fmt::format("alert {} [{}] {}", cell(p["id"]), cell(p["severity"]),
-                                            cell(p["message"])));
-        }
+      } else if (method == "alert" && p.value("scan_id", scan) == scan) {
+        if (p.value("count", 1) == 1) ++alerts;
       }
       draw();
     }
@@ -79,15 +75,23 @@ int watch_scan(Session& s, std::int64_t scan, bool json_lines) {
       draw();
     }
   }
+  // The store's final word: the verdict and the alerts as they stand now (a sustained alert's
+  // message follows the verdict; the ones the verdict no longer supports are resolved).
+  sc = c.call("scan.get", json{{"scan", scan}});
   if (!json_lines) {
     if (tty) std::cout << "\n";
-    for (const auto& a : alert_lines) std::cout << a << "\n";
+    const auto a = scan_alerts(s, scan);
+    for (const auto& x : a.list)
+      if (x.value("resolved_at", json()).is_null())
+        std::cout << fmt::format("alert {} [{}] {}\n", cell(x["id"]), cell(x["severity"]), cell(x["message"]));
     std::cout << fmt::format("scan {} {}{}: {} of {} points, {} diverged\n", scan, state,
-                             reason.empty() ? "" : " (" + reason + ")", done, total, diverged);
+                             reason.empty() ? "" : " (" + reason + ")", done, total, diverged)
+              << verdict_text(sc["verdict"]) << alerts_text(a, scan);
   } else {
-    std::cout << c.call("scan.get", json{{"scan", scan}}).dump() << "\n";
+    std::cout << sc.dump() << "\n";
   }
-  return state == "completed" ? ctl_exit::ok : ctl_exit::scan_not_completed;
+  if (state != "completed") return ctl_exit::scan_not_completed;
+  return exit_status ? verdict_exit_code(sc) : ctl_exit::ok;
 }
 
 }  // namespace gonio::daemon::ctl

@@ -43,6 +43,7 @@
 #include "gonio/daemon/rpc/rpc.hpp"
 #include "gonio/daemon/store/retention.hpp"
 #include "gonio/daemon/store/store.hpp"
+#include "startup/instrument_tables.hpp"
 
 #include "gonio/proto/json_util.hpp"
 #include "gonio/proto/version.hpp"
@@ -80,16 +81,18 @@ void write_file_atomic(const fs::path& path, const std::string& text, fs::perms 
   fs::rename(tmp, path);
 }
 
+// --check-config shows what goniod would log as warnings.
+std::string warnings_text(const Config& c) {
+  std::string out;
+  for (const auto& w : c.warnings) out += fmt::format("# warning: {}\n", w);
+  return out;
+}
+
 Config load_config(const DaemonOptions& o) {
   std::optional<Config> base;
   if (o.mock) base = Config::mock_defaults();
   Config c = o.config_file ? Config::load(*o.config_file, base) : base.value_or(Config{});
-  if (o.mock && c.motion.value("driver", "") != "mock") {
-    // --mock wins over hardware tables in the file: never drive real arms by accident.
-    const auto m = Config::mock_defaults();
-    c.motion = m.motion;
-    c.photometer = m.photometer;
-  }
+  settle_instrument_tables(c, o.mock);  // --mock wins over hardware tables, and says so
   if (!o.listen.empty()) {
     c.listen.clear();
     for (std::size_t i = 0; i < o.listen.size(); ++i)
@@ -503,6 +506,7 @@ int check_config(const DaemonOptions& o, std::ostream& out, std::ostream& err) {
                        source, GONIO_VERSION_STRING)
         << json_to_toml(config.to_json()) << "\n\n"
         << unset_keys(config)
+        << warnings_text(config)
         << fmt::format("# instrument: motion driver '{}', axes {}; photometer driver '{}'\n",
                        inst.motion_driver, axes_text(inst.motion), inst.photometer_driver)
         << fmt::format("# the arms are kept {}° apart{}\n", inst.min_separation,

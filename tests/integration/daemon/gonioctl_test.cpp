@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <fstream>
 #include <iterator>
+
+#include <fmt/format.h>
 #include <numbers>
 
 #include "gonio/test/daemon_harness.hpp"
@@ -19,9 +21,9 @@ struct Run {
   std::string out;
 };
 
-// Runs gonioctl with `args`; stdout and stderr together.
-Run gonioctl(const std::vector<std::string>& args) {
-  std::string cmd = std::string(GONIO_BIN_DIR) + "/gonioctl";
+// Runs a program of the build with `args`; stdout and stderr together.
+Run run(const std::string& program, const std::vector<std::string>& args) {
+  std::string cmd = std::string(GONIO_BIN_DIR) + "/" + program;
   for (const auto& a : args) {
     cmd += " '";
     for (char ch : a) cmd += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
@@ -37,6 +39,8 @@ Run gonioctl(const std::vector<std::string>& args) {
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
 }
+
+Run gonioctl(const std::vector<std::string>& args) { return run("gonioctl", args); }
 
 TEST(Gonioctl, CommandsTablesJsonAndExitCodes) {
   TempDir dir;
@@ -139,6 +143,116 @@ TEST(Gonioctl, TablesOfTheWalkThroughScanRoundTrip) {
 // The verdict where people look: `scan get`, `scan watch` and `submit --watch` end with the
 // verdict line and the scan's alerts as alert.list has them; --exit-status turns the verdict
 // into an exit code for scripts (10 out_of_tolerance, 0 agrees).
+TEST(Gonioctl, VerdictLineAlertCountAndExitStatus) {
+  TempDir dir;
+  Goniod g(dir.path, mock_config({}));
+  const std::string sd = dir.path.string();
+  ASSERT_EQ(gonioctl({"--state-dir", sd, "sample", "create", "tile", "--bsdf", kTrueSample}).code, 0);
+  ASSERT_EQ(gonioctl({"--state-dir", sd, "sample", "create", "grey", "--bsdf", "lambert:albedo=0.3",
+                      "--tolerance", "0.02"}).code, 0);
+  const std::string grid = "in=45;out=-30:80:5";
+  // The catalogue is the mock's true sample: the scan agrees, and --exit-status says 0.
+  auto r = gonioctl({"--state-dir", sd, "scan", "submit", "--sample", "tile", "--grid", grid, "--watch", "--exit-status"});
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("verdict: agrees over"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("alerts: none"), std::string::npos) << r.out;
+  // Catalogued at half the true albedo: out of tolerance, a sample parameter named.
+  r = gonioctl({"--state-dir", sd, "scan", "submit", "--sample", "grey", "--grid", grid, "--watch", "--exit-status"});
+  EXPECT_EQ(r.code, 10) << r.out;
+  EXPECT_NE(r.out.find("verdict: out_of_tolerance over"), std::string::npos) << r.out;
+  EXPECT_EQ(gonioctl({"--state-dir", sd, "scan", "watch", "2"}).code, 0);  // without the flag: completed is 0
+  // The alert count of a finished scan is alert.list's, not the notifications seen.
+  r = gonioctl({"--state-dir", sd, "--json", "alert", "list", "--scan", "2"});
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto standing = json::parse(r.out).size();
+  ASSERT_GT(standing, 0u);
+  r = gonioctl({"--state-dir", sd, "scan", "watch", "2", "--exit-status"});
+  EXPECT_EQ(r.code, 10) << r.out;
+  EXPECT_NE(r.out.find(fmt::format("alerts {}\n", standing)), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(fmt::format("alerts: {} standing", standing)), std::string::npos) << r.out;
+  r = gonioctl({"--state-dir", sd, "scan", "get", "2", "--exit-status"});
+  EXPECT_EQ(r.code, 10) << r.out;
+  EXPECT_NE(r.out.find("verdict: out_of_tolerance"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("sample grey (2)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("wavelengths 400:700:10 nm"), std::string::npos) << r.out;
+  r = gonioctl({"--state-dir", sd, "scan", "get", "1", "--exit-status"});
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("verdict: agrees"), std::string::npos) << r.out;
+  // --exit-status means nothing without the watch: refused before anything is queued.
+  r = gonioctl({"--state-dir", sd, "scan", "submit", "--sample", "tile", "--grid", grid, "--exit-status"});
+  EXPECT_EQ(r.code, 2) << r.out;
+  r = gonioctl({"--state-dir", sd, "--json", "scan", "list"});
+  EXPECT_EQ(json::parse(r.out).size(), 2u) << r.out;
+  // People's output: the instrument's state first, counters on request; sample names in the
+  // list, a chosen channel in the points.
+  r = gonioctl({"--state-dir", sd, "info"});
+  EXPECT_NE(r.out.find("instrument: idle, connected"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("fault latch: clear"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("governor."), std::string::npos) << r.out;
+  r = gonioctl({"--state-dir", sd, "info", "--verbose"});
+  EXPECT_NE(r.out.find("governor."), std::string::npos) << r.out;
+  r = gonioctl({"--state-dir", sd, "scan", "list"});
+  EXPECT_NE(r.out.find("grey"), std::string::npos) << r.out;
+  r = gonioctl({"--state-dir", sd, "scan", "points", "1", "--wavelength", "620", "--limit", "1"});
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find(" 620 "), std::string::npos) << r.out;
+  r = gonioctl({"--state-dir", sd, "scan", "points", "1", "--wavelength", "625"});
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("no channel at 625 nm; the scan measured 400:700:10 nm"), std::string::npos) << r.out;
+}
+
+// Errors that say what to do next.
+TEST(Gonioctl, ErrorsNameTheNextStep) {
+  TempDir dir;
+  Goniod g(dir.path, mock_config({}));
+  const std::string sd = dir.path.string();
+  ASSERT_EQ(gonioctl({"--state-dir", sd, "sample", "create", "paint", "--bsdf", kTrueSample}).code, 0);
+  auto r = gonioctl({"--state-dir", sd, "scan", "submit", "--sample", "pain", "--geometry", "45/0"});
+  EXPECT_EQ(r.code, 5) << r.out;
+  EXPECT_NE(r.out.find("did you mean 'paint'?"), std::string::npos) << r.out;
+  r = gonioctl({"--state-dir", sd, "call", "scan.gett"});
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("did you mean 'scan.get'?"), std::string::npos) << r.out;
+  r = gonioctl({"--state-dir", sd, "scna", "list"});
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("unknown command 'scna' (did you mean 'scan'?)"), std::string::npos) << r.out;
+  r = gonioctl({"--state-dir", sd, "scan", "lsit"});
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("did you mean 'list'?"), std::string::npos) << r.out;
+  // A token file that is not there is that, not "a token is needed".
+  const auto missing = (dir.path / "no.token").string();
+  r = gonioctl({"--state-dir", sd, "--connect", g.uri("tcp://"), "--token-file", missing, "info"});
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("file not found: " + missing), std::string::npos) << r.out;
+  // No goniod on the socket: start it, or point at its state dir.
+  r = gonioctl({"--state-dir", (dir.path / "nowhere").string(), "info"});
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("cannot connect to unix:"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("--state-dir"), std::string::npos) << r.out;
+}
+
+// goniod's instrument tables: a driver name it does not know is an error naming the key and
+// the near name, with --mock or without; --mock replacing a hardware table warns.
+TEST(Gonioctl, GoniodConfigTyposAndMockReplacementAreSaid) {
+  TempDir dir;
+  const auto typo = dir.path / "typo.toml", hw = dir.path / "hw.toml";
+  std::ofstream(typo) << "[instrument.motion]\ndriver = \"mokc\"\nsample = \"lambert:albedo=0.3\"\n";
+  std::ofstream(hw) << "[instrument.motion]\ndriver = \"modbus\"\n\n[instrument.photometer]\n"
+                       "driver = \"scpi-tcp\"\nhost = \"127.0.0.1\"\n";
+  for (const bool mock : {true, false}) {
+    const auto r = run("goniod", mock ? std::vector<std::string>{"--mock", "--check-config", typo.string()}
+                                      : std::vector<std::string>{"--check-config", typo.string()});
+    EXPECT_EQ(r.code, 2) << mock << r.out;
+    EXPECT_NE(r.out.find("instrument.motion.driver: 'mokc' is not a driver (did you mean 'mock'?)"), std::string::npos)
+        << mock << r.out;
+    EXPECT_NE(r.out.find("modbus, mock, scpi-serial"), std::string::npos) << r.out;
+  }
+  const auto r = run("goniod", {"--mock", "--check-config", hw.string()});
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("# warning: --mock replaces the configured instrument (motion driver 'modbus'"), std::string::npos)
+      << r.out;
+}
+
 TEST(Gonioctl, DemoRunsTheMainJobEndToEnd) {
   TempDir dir;
   const auto demo = dir.path / "demo";
@@ -146,7 +260,9 @@ TEST(Gonioctl, DemoRunsTheMainJobEndToEnd) {
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("56 points"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("divergence summary: 0 of 56 points out of tolerance"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("verdict: "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("verdict: agrees over 56 points"), std::string::npos) << r.out;
+  // Every point undecided on its own and a scan that agrees: the demo says why.
+  EXPECT_NE(r.out.find("why it agrees while 56 points are undecided"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("goniod stopped (exit 0)"), std::string::npos) << r.out;
   ASSERT_TRUE(fs::exists(demo / "demo.png"));
   std::ifstream png(demo / "demo.png", std::ios::binary);

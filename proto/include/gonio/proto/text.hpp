@@ -37,7 +37,8 @@ std::string format_number(double v);
 std::string format_measured(double value, double u);
 
 // The candidates closest to `word` by edit distance (a typo or two, or a prefix), best
-// first, at most `max` of them: for "did you mean ..." in errors about unknown names.
+// first (only those as near as the nearest), at most `max` of them: for "did you mean ..."
+// in errors about unknown names.
 std::vector<std::string> near_matches(std::string_view word, const std::vector<std::string>& candidates,
                                       std::size_t max = 3);
 // " (did you mean 'mock'?)", " (did you mean 'a' or 'b'?)", or "" when nothing is near.

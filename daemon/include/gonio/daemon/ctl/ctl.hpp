@@ -5,7 +5,9 @@
 // Exit codes (ctl_exit): 0 ok, 1 other server error, 2 usage or invalid params, 3 cannot
 // connect / connection lost, 4 unauthorized or forbidden, 5 not found, 6 invalid state or
 // instrument busy, 7 instrument fault or limit violation, 8 plan rejected, 9 a watched scan
-// ended other than completed, 70 internal error.
+// ended other than completed, 70 internal error. With --exit-status, a watched scan that
+// completed exits with its verdict: 10 out_of_tolerance, 11 instrument_out_of_spec (0 for
+// agrees and undecided) — results, not errors, so they stay apart from the codes above.
 #pragma once
 
 #include <string>
@@ -26,6 +28,8 @@ inline constexpr int state = 6;
 inline constexpr int instrument = 7;
 inline constexpr int plan = 8;
 inline constexpr int scan_not_completed = 9;
+inline constexpr int out_of_tolerance = 10;
+inline constexpr int instrument_out_of_spec = 11;
 inline constexpr int internal = 70;
 }  // namespace ctl_exit
 
