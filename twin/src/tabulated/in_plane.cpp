@@ -91,9 +91,10 @@ BsdfTable build(std::span<const InPlaneReading> readings, std::vector<double> wa
   if (gaps) {
     // By θi then θr; θr = 0 lies on both sides and is one gap.
     const auto key = [](const Geometry& g) { return std::pair(g.theta_i, g.theta_r); };
-    std::ranges::sort(*gaps, {}, key);
-    const auto dup = std::ranges::unique(*gaps, {}, key);
-    gaps->erase(dup.begin(), dup.end());
+    std::sort(gaps->begin(), gaps->end(), [&](const Geometry& a, const Geometry& b) { return key(a) < key(b); });
+    gaps->erase(std::unique(gaps->begin(), gaps->end(),
+                            [&](const Geometry& a, const Geometry& b) { return key(a) == key(b); }),
+                gaps->end());
   }
   return BsdfTable(TableParam::spherical, std::move(axes), std::move(wavelengths_nm),
                    std::move(values), TableReduction{true, false});
@@ -136,8 +137,10 @@ std::vector<std::string> InPlaneTable::gap_ranges() const {
       first.reset();
     };
     for (const double tr : row) {
-      const bool gap = std::ranges::binary_search(
-          gaps, std::pair(ti, tr), {}, [](const Geometry& g) { return std::pair(g.theta_i, g.theta_r); });
+      const bool gap = std::binary_search(gaps.begin(), gaps.end(), Geometry::in_plane(ti, tr),
+                                          [](const Geometry& a, const Geometry& b) {
+                                            return std::pair(a.theta_i, a.theta_r) < std::pair(b.theta_i, b.theta_r);
+                                          });
       if (!gap) {
         close();
         continue;

@@ -345,9 +345,9 @@ std::vector<std::string> write_issa(std::ostream& out, const BsdfTable& table, b
         radial.push_back(std::abs(to - ti));
         if (ti + to <= 180) radial.push_back(ti + to);
       }
-    std::ranges::sort(radial);
-    const auto dup = std::ranges::unique(radial, [](double a, double b) { return b - a < 1e-9; });
-    radial.erase(dup.begin(), dup.end());
+    std::sort(radial.begin(), radial.end());
+    radial.erase(std::unique(radial.begin(), radial.end(), [](double a, double b) { return b - a < 1e-9; }),
+                 radial.end());
   }
   check_option_list(incidence, "incidence", 0, 90);
   check_option_list(azimuth, "azimuth", 0, plane ? 180 : 360);
