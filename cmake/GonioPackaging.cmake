@@ -92,7 +92,8 @@ set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 # (deb-systemd-helper and deb-systemd-invoke come with init-system-helpers, an essential
 # package: not named.)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "systemd, colord-data")
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "udev, fonts-dejavu-core")
+# openssl: the postinst's self-signed certificate for the TLS listeners.
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "udev, fonts-dejavu-core, openssl")
 
 # /etc/gonio/goniod.toml is edited on every installation: a conffile that upgrades keep.
 file(CONFIGURE OUTPUT ${PROJECT_BINARY_DIR}/deploy/debian/conffiles

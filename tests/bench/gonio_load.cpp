@@ -339,6 +339,8 @@ using Calls = std::vector<std::pair<std::string, json>>;
 int g_client_nice = 0;
 // --parse-replies: every answer parsed whole (Client::call) instead of checked.
 bool g_parse_replies = false;
+// --ca: the CA of a tls:// goniod (--connect).
+std::string g_ca;
 
 // User + system CPU time of a process so far (/proc/PID/stat, proc(5) fields 14 and 15).
 double process_cpu_seconds(pid_t pid) {
@@ -370,7 +372,7 @@ Result run_clients(const std::string& target, const std::string& uri, const std:
       if (g_client_nice > 0) ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), g_client_nice);
       std::optional<Client> c;
       try {
-        c.emplace(uri, std::chrono::seconds(10));
+        c.emplace(uri, std::chrono::seconds(10), g_ca);
         if (!token.empty()) c->login(token);
       } catch (const std::exception& e) {
         std::cerr << "gonio-load: client " << i << ": " << e.what() << "\n";
@@ -643,6 +645,7 @@ json measure_hostile(Client& admin, const Goniod& g, std::int64_t scan, double s
 struct Report {
   std::vector<Result> results;
   json before, after, scan, throughput = nullptr, hostile = json::object();
+  json connect;  // measure_connect
   std::int64_t scan_id = 0;
 };
 
@@ -687,12 +690,16 @@ void print(const Report& rep, const Options& o) {
     std::cout << json{{"results", out},           {"vs_echo", vs_echo}, {"goniod_rss_mib", rss_mib},
                       {"runner", runner},         {"scan", rep.scan},
                       {"points_during_run", points_during}, {"hostile", rep.hostile},
-                      {"throughput", rep.throughput}}
+                      {"throughput", rep.throughput}, {"connect", rep.connect}}
                      .dump(2)
               << "\n";
     return;
   }
   std::cout << t.render() << ratios;
+  std::cout << fmt::format("connect: a new connection and auth.login p50 {:.3f} ms, its first system.info p50 {:.3f} ms "
+                           "({} connections, one at a time)\n",
+                           rep.connect["connect_login_p50_ms"].get<double>(), rep.connect["first_call_p50_ms"].get<double>(),
+                           rep.connect["connections"].get<int>());
   std::cout << fmt::format(
       "goniod: rss {:.1f} MiB; scan {} {} with {} points measured during the run; runner's own time "
       "per point p50 {} ms, p99 {} ms, max {} ms (last {} points)\n",
@@ -721,6 +728,27 @@ void print(const Report& rep, const Options& o) {
   }
 }
 
+// A new connection's cost, one at a time: connect (and the TLS handshake on tls://) and
+// auth.login, then one system.info; each phase's median over kConnects connections.
+json measure_connect(const std::string& uri, const std::string& token) {
+  constexpr int kConnects = 200;
+  std::vector<double> setup, first;
+  for (int i = 0; i < kConnects; ++i) {
+    const auto t0 = Clock::now();
+    Client c(uri, std::chrono::seconds(10), g_ca);
+    if (!token.empty()) c.login(token);
+    const auto t1 = Clock::now();
+    c.call_checked("system.info");
+    setup.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    first.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t1).count());
+  }
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  return {{"connections", kConnects}, {"connect_login_p50_ms", median(setup)}, {"first_call_p50_ms", median(first)}};
+}
+
 // Every target against goniod (its own, or the one at --connect), the echo baseline first.
 void run(Options o) {
   std::optional<Goniod> own;
@@ -733,9 +761,10 @@ void run(Options o) {
     std::ifstream tok(o.token_file);
     std::getline(tok, token);
   }
-  Client admin(uri, std::chrono::seconds(30));
+  Client admin(uri, std::chrono::seconds(30), g_ca);
   if (!token.empty()) admin.login(token);
   Report rep;
+  rep.connect = measure_connect(uri, token);
   if (own) {
     rep.scan_id = start_scan(admin, false);
   } else {
@@ -790,7 +819,8 @@ int main(int argc, char** argv) {
   CLI::App app{"gonio-load — goniod latency and throughput beside a loopback echo baseline"};
   Options o;
   app.add_option("--goniod", o.goniod, "goniod to start (default: next to gonio-load)");
-  app.add_option("--connect", o.connect, "measure a running goniod at tcp://HOST:PORT instead");
+  app.add_option("--connect", o.connect, "measure a running goniod at tcp://HOST:PORT or tls://HOST:PORT instead");
+  app.add_option("--ca", g_ca, "with --connect tls://: the CA file of goniod's certificate");
   app.add_option("--token", o.token, "bearer token for --connect");
   app.add_option("--token-file", o.token_file, "file with the token for --connect");
   app.add_option("--clients", o.clients, "concurrent clients")->check(CLI::Range(1, 1024));

@@ -71,7 +71,7 @@ done
 # stands in for --check-config: it fails when $tmp/config-bad exists.
 mkdir "$tmp/bin"
 for c in systemd-sysusers systemd-tmpfiles systemctl udevadm deb-systemd-helper deb-systemd-invoke \
-         goniod; do
+         goniod chown; do
   printf '#!/bin/sh\necho "%s $*" >>"%s"\n' "$c" "$tmp/calls" >"$tmp/bin/$c"
   chmod +x "$tmp/bin/$c"
 done
@@ -136,6 +136,31 @@ fi
 run postinst configure 0.1.0
 grep -E '^systemctl (enable|start|restart|stop|disable)|deb-systemd-invoke (start|restart)' <<<"$calls" &&
   fail "postinst enables or starts goniod"
+
+# The TLS listeners' self-signed certificate: made by a first configure in /etc/gonio/tls
+# (which tmpfiles.d makes), the key 0600 and the gonio user's, and left alone by the next one.
+# Run with the real openssl in a private mount namespace whose /etc is an overlay, so that
+# nothing of this machine's /etc changes.
+if command -v openssl >/dev/null && unshare -m sh -c 'mount -t tmpfs gonio-test "$1"' sh "$tmp" 2>/dev/null; then
+  mkdir "$tmp/etc"
+  : >"$tmp/calls"
+  out=$(PATH=$tmp/bin:$PATH unshare -m sh -c '
+    mount -t tmpfs gonio-test "$1" && mkdir "$1/u" "$1/w" &&
+    mount -t overlay overlay -o "lowerdir=/etc,upperdir=$1/u,workdir=$1/w" /etc && mkdir -p /etc/gonio/tls &&
+    sh "$2" configure >/dev/null && stat -c "key %a" /etc/gonio/tls/goniod.key &&
+    openssl x509 -in /etc/gonio/tls/goniod.pem -noout -checkend 86400 -ext subjectAltName &&
+    before=$(sha256sum /etc/gonio/tls/goniod.pem) && sh "$2" configure 0.1.0 >/dev/null &&
+    [ "$before" = "$(sha256sum /etc/gonio/tls/goniod.pem)" ] && echo kept' sh "$tmp/etc" "$tmp/control/postinst" 2>&1) ||
+    fail "postinst's certificate:"$'\n'"$out"
+  grep -qx 'key 600' <<<"$out" || fail "the self-signed key is not mode 0600: $out"
+  grep -q 'Certificate will not expire' <<<"$out" || fail "the self-signed certificate is not valid for a day: $out"
+  grep -q 'IP Address:127.0.0.1' <<<"$out" || fail "the self-signed certificate does not name 127.0.0.1: $out"
+  grep -qx 'kept' <<<"$out" || fail "a second configure replaced the certificate: $out"
+  grep -q '^chown gonio:gonio /etc/gonio/tls/goniod.key$' "$tmp/calls" ||
+    fail "the key is not given to the gonio user: $(cat "$tmp/calls")"
+else
+  echo "note: no openssl or no private mount namespace (not root?): the self-signed certificate is not made here"
+fi
 
 # DPKG_ROOT: accounts and directories in that root, nothing of this machine touched.
 DPKG_ROOT=$tmp/r run postinst configure 0.1.0

@@ -152,6 +152,17 @@ class TlsConn {
       buf_.append(b, static_cast<std::size_t>(n));
     }
   }
+  // Writes `bytes` without reading; false once the connection has ended.
+  bool write_all(const std::string& bytes) {
+    int small = 4096;  // the kernel takes little of what goniod writes back
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+    for (std::size_t off = 0; off < bytes.size();) {
+      const int n = SSL_write(ssl_, bytes.data() + off, static_cast<int>(std::min<std::size_t>(bytes.size() - off, 16384)));
+      if (n <= 0) return false;
+      off += static_cast<std::size_t>(n);
+    }
+    return true;
+  }
   json call(const std::string& method, const json& params = json::object()) {
     const auto r = request(method, params);
     if (r.contains("error")) throw std::runtime_error(method + ": " + r["error"].dump());
@@ -241,6 +252,27 @@ TEST(Tls, AHandshakeThatNeverFinishesIsCutAtTheDeadline) {
       EXPECT_GE(t["dropped"].get<int>(), 2) << t.dump();
     }
   EXPECT_NE(g.log_text().find("TLS handshake did not complete within 1 s"), std::string::npos) << g.log_text();
+}
+
+// The plain listeners' limits hold over TLS: a peer that pipelines requests and never reads
+// the answers is dropped as a slow reader, and the shared byte budget is given back.
+TEST(Tls, APeerThatDoesNotReadIsDroppedAsOverPlainTcp) {
+  Pki pki;
+  pki.issue("server", "goniod-test", true);
+  TempDir dir;
+  Goniod g(dir.path, tls_config(tls_section(pki, "server"), "max_queue_bytes = 65536\nwrite_timeout_s = 1\n"));
+  TlsConn c(port_of(g.uri("tls://")), pki.ca);
+  c.call("auth.login", {{"token", g.admin_token()}});
+  std::string lines;
+  for (int i = 0; i < 400; ++i) lines += json{{"jsonrpc", "2.0"}, {"id", i}, {"method", "rpc.discover"}}.dump() + "\n";
+  ::signal(SIGPIPE, SIG_IGN);  // OpenSSL writes with write(2): the drop must not end the test
+  std::thread writer([&] { c.write_all(lines); });  // fails once goniod has dropped the peer
+  const auto net = [&] { return g.unix_conn().call("system.info")["net"]; };
+  const bool dropped = eventually([&] { return net()["slow_readers_dropped"].get<int>() >= 1; }, 20s);
+  writer.join();
+  EXPECT_TRUE(dropped) << net().dump();
+  EXPECT_TRUE(eventually([&] { return net()["buffered_bytes"].get<std::size_t>() < 65536; })) << net().dump();
+  EXPECT_EQ(TlsConn(port_of(g.uri("tls://")), pki.ca).request("rpc.discover")["result"].is_object(), true);
 }
 
 TEST(Tls, SighupServesARenewedCertificateToNewConnectionsWhileOldSessionsGoOn) {
