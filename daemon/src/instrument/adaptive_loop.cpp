@@ -98,11 +98,11 @@ std::optional<std::size_t> AdaptiveLoop::choose(const std::vector<std::size_t>& 
   return design_->next(pending, arms);
 }
 
-std::optional<std::size_t> AdaptiveLoop::first() {
+std::optional<std::size_t> AdaptiveLoop::first(const std::optional<Geometry>& arms) {
   std::lock_guard lock(mu_);
   const auto& cand = design_->candidates();
   if (taken_ >= seeds_.size() && design_->target_reached()) return std::nullopt;
-  return choose({}, cand[last_.value_or(seeds_.empty() ? 0 : seeds_.front())]);
+  return choose({}, arms ? *arms : cand[last_.value_or(seeds_.empty() ? 0 : seeds_.front())]);
 }
 
 void AdaptiveLoop::measuring(std::size_t c) {

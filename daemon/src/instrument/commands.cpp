@@ -135,7 +135,10 @@ Scan Instrument::cancel(std::int64_t id, const std::string& actor, const std::st
 
 DeviceFacts Instrument::device_facts() const {
   std::lock_guard lock(mu_);
-  return DeviceFacts{axes_, photometer_grid_};
+  DeviceFacts f{axes_, photometer_grid_, std::nullopt};
+  if (positions_.contains(Axis::incidence) && positions_.contains(Axis::receive))
+    f.arms = Geometry::in_plane(positions_.at(Axis::incidence), positions_.at(Axis::receive));
+  return f;
 }
 
 void Instrument::validate_plan(const ScanPlan& plan) const {

@@ -19,33 +19,22 @@ Error reject(std::size_t k, const Geometry& g, const std::string& why) {
   return Error(Errc::plan_rejected, fmt::format("{} ({}): {}", field, g.to_string(), why), field);
 }
 
-// Whether the arms can go from `a` to `b` moving one arm, then the other.
-bool reachable(const MotionGuard& guard, const Geometry& a, const Geometry& b,
-               bool incidence_first) {
-  try {
-    if (incidence_first) {
-      guard.check_move(Axis::incidence, a.theta_i, b.theta_i, a.theta_r);
-      guard.check_move(Axis::receive, a.theta_r, b.theta_r, b.theta_i);
-    } else {
-      guard.check_move(Axis::receive, a.theta_r, b.theta_r, a.theta_i);
-      guard.check_move(Axis::incidence, a.theta_i, b.theta_i, b.theta_r);
-    }
-    return true;
-  } catch (const Error&) {
-    return false;
-  }
-}
-
 }  // namespace
 
 bool arms_can_move(const drivers::MotionGuard& guard, const Geometry& a, const Geometry& b) {
-  return reachable(guard, a, b, true) || reachable(guard, a, b, false);
+  return guard.clearance().can_move(a, b);
 }
 
 void check_plan(const ScanPlan& plan, const MotionGuard& guard, const DeviceFacts& devices) {
   const bool know_axes = !devices.axes.empty();
   const bool has_rotation = std::ranges::find(devices.axes, Axis::rotation) != devices.axes.end();
   const double sep = guard.min_separation_deg();
+  const auto& arms = guard.clearance();
+  // Arms resting inside the zone (homed there) take the side of the first geometry.
+  const bool know_arms = devices.arms && arms.side(*devices.arms);
+  const std::optional<long> side =
+      know_arms ? arms.side(*devices.arms)
+                : plan.geometries.empty() ? std::nullopt : arms.side(plan.geometries.front());
   for (std::size_t k = 0; k < plan.geometries.size(); ++k) {
     const auto& g = plan.geometries[k];
     if (g.phi_i != g.phi_r)
@@ -60,14 +49,20 @@ void check_plan(const ScanPlan& plan, const MotionGuard& guard, const DeviceFact
     } catch (const Error& e) {
       throw reject(k, g, e.what());
     }
-    const double s = MotionGuard::arm_separation(g.theta_i, g.theta_r);
-    if (s < sep)
-      throw reject(k, g, fmt::format("the arms would be {:g}° apart, inside the collision zone "
-                                     "(minimum separation {:g}°)",
-                                     s, sep));
+    if (const auto why = arms.why_not_clear(g); !why.empty()) throw reject(k, g, why);
+    // The arms never leave the side of the collision zone they stand on: the first geometry
+    // (an adaptive plan's every candidate, measured in any order) must be on theirs, or —
+    // before the arms' position is known — on the first geometry's.
+    if ((k == 0 || plan.adaptive) && arms.side(g) != side) {
+      const auto from = know_arms ? fmt::format("the arms, which stand at {}", devices.arms->to_string())
+                                     : fmt::format("geometries[0] ({})", plan.geometries[0].to_string());
+      throw reject(k, g, fmt::format("on the other side of the collision zone from {}: the arms "
+                                     "cannot pass through each other (minimum separation {:g}°)",
+                                     from, sep));
+    }
     if (k > 0 && !plan.adaptive) {
       const auto& prev = plan.geometries[k - 1];
-      if (!reachable(guard, prev, g, true) && !reachable(guard, prev, g, false))
+      if (!arms.can_move(prev, g))
         throw reject(k, g, fmt::format("the arms cannot move here from {} without entering the "
                                        "collision zone (minimum separation {:g}°)",
                                        prev.to_string(), sep));

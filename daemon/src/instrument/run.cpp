@@ -118,7 +118,7 @@ void Instrument::start_run(const Scan& scan) {
           scan.plan, snap.profile,
           [this](const Geometry& a, const Geometry& b) { return arms_can_move(guard_, a, b); });
       r->adaptive->restore(stored);
-      r->candidate = r->adaptive->first();
+      r->candidate = r->adaptive->first(device_facts().arms);
     } catch (const Error& e) {
       adaptive_failure = fmt::format("the adaptive loop cannot run: {}", e.what());
     }

@@ -235,5 +235,38 @@ TEST(Adaptive, BadAdaptivePlansNameTheirField) {
   EXPECT_EQ(g.stop(), 0);
 }
 
+TEST(Adaptive, CandidatesTheArmsCannotReachAreRefusedAtSubmission) {
+  // The arms rest at 0°/45°: 45°/−80…−55° lies beyond the collision zone (10° on the mock),
+  // where they can never pass. Refused at submission like a plain scan, naming the geometry —
+  // never queued to latch a device fault when the loop first moves there.
+  TempDir dir;
+  Goniod g(dir.path, mock_config(MockOptions{}));
+  auto c = g.unix_conn();
+  c.call("sample.create", json{{"name", "s"}});
+  for (const auto& adaptive :
+       {json{{"mode", "parameters"}, {"model", kModel}, {"target_rel_u", 0.05}, {"max_points", 20}},
+        json{{"mode", "curve"}, {"tolerance", 0.01}, {"max_points", 20}}}) {
+    json plan{{"sample", "s"}, {"grids", {"in=45;out=-80:-55:1,-35:80:1"}}, {"adaptive", adaptive}};
+    const auto r = c.request("scan.submit", plan);
+    ASSERT_TRUE(r.contains("error")) << r.dump();
+    EXPECT_EQ(r["error"]["code"], -32006) << r.dump();
+    EXPECT_EQ(r["error"]["data"]["field"], "geometries[0]") << r.dump();
+    const auto msg = r["error"]["message"].get<std::string>();
+    EXPECT_NE(msg.find("45/-80"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("other side of the collision zone"), std::string::npos) << msg;
+  }
+  EXPECT_EQ(c.call("scan.list", json::object()).size(), 0u);
+  // The reachable side of the same grid runs to its end without a fault.
+  const auto id = c.call("scan.submit", json{{"sample", "s"},
+                                             {"grids", {"in=45;out=-35:80:5"}},
+                                             {"wavelengths", "450,550,650"},
+                                             {"adaptive", {{"mode", "curve"}, {"tolerance", 0.05}, {"max_points", 8}}}})["id"]
+                      .get<std::int64_t>();
+  const auto sc = wait_state(c, id, {"completed", "failed", "paused"}, 120s);
+  EXPECT_EQ(sc["state"], "completed") << sc.dump() << g.log_text();
+  EXPECT_EQ(c.call("instrument.status")["fault_latched"], false);
+  EXPECT_EQ(g.stop(), 0);
+}
+
 }  // namespace
 }  // namespace gonio::test

@@ -11,6 +11,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "gonio/proto/arms.hpp"
+#include "gonio/proto/geometry.hpp"
 #include "gonio/proto/version.hpp"
 #include "gonio/twin/plot.hpp"
 #include "gonio/test/temp_dir.hpp"
@@ -132,6 +134,39 @@ TEST(GonioTwinCli, PlanPrintsAGridThatParsesBack) {
   const auto p = gonio_twin("predict --bsdf lambert --wavelengths 550 --rel-se 0.01 --csv --grid '" + line + "'");
   EXPECT_EQ(p.code, 0) << p.err;
   EXPECT_NE(r.err.find("points instead of 81 dense"), std::string::npos) << r.err;
+}
+
+// The planners propose only what the arms can reach (the profile's 10° clearance, on the
+// side of its 0°/45° calibration geometry), so that their grids paste into a scan as they are.
+TEST(GonioTwinCli, PlanAndDesignKeepToWhatTheArmsCanReach) {
+  auto r = gonio_twin("plan --bsdf conductor:alpha=0.1,eta=0.2,k=3.9 --in 45 --dense-step 1 "
+                      "--tolerance 0.02 --rel-se 0.002 --wavelengths 550");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto line = r.out.substr(0, r.out.find('\n'));
+  const gonio::ArmClearance arms(10);
+  const auto grid = gonio::parse_geometry_grid(line);
+  ASSERT_FALSE(grid.empty());
+  EXPECT_EQ(grid.front().theta_r, -35) << line;
+  for (std::size_t k = 0; k < grid.size(); ++k) {
+    EXPECT_TRUE(arms.clear(grid[k])) << grid[k].to_string();
+    if (k > 0) {
+      EXPECT_TRUE(arms.can_move(grid[k - 1], grid[k])) << grid[k].to_string();
+    }
+  }
+  EXPECT_NE(r.err.find("below -35° left out"), std::string::npos) << r.err;
+  // A candidate goniod would refuse is refused, naming it, in both modes.
+  for (const std::string mode : {"--curve", "--model conductor:alpha=?,eta=0.2,k=3.9"}) {
+    r = gonio_twin("design " + mode + " --bsdf conductor:alpha=0.1,eta=0.2,k=3.9 --wavelengths 550 "
+                   "--grid 'in=45;out=-40:80:5' --max-points 10");
+    EXPECT_NE(r.code, 0) << r.out;
+    EXPECT_NE(r.err.find("candidates[0] (45/-40)"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("collision zone"), std::string::npos) << r.err;
+  }
+  r = gonio_twin("design --curve --bsdf conductor:alpha=0.1,eta=0.2,k=3.9 --wavelengths 550 "
+                 "--grid 'in=45;out=-35:80:5' --max-points 24");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto chosen = r.out.substr(r.out.find("geometries:"));
+  EXPECT_EQ(chosen.find("45/-40"), std::string::npos) << chosen;
 }
 
 TEST(GonioTwinCli, ConvertRoundTripsThroughBothFormats) {

@@ -22,7 +22,7 @@ MotionGuard guard() {
   return g;
 }
 
-const DeviceFacts kArms{{Axis::incidence, Axis::receive}, WavelengthGrid::parse("400:700:10")};
+const DeviceFacts kArms{{Axis::incidence, Axis::receive}, WavelengthGrid::parse("400:700:10"), std::nullopt};
 
 ScanPlan plan_of(std::vector<Geometry> geometries) {
   ScanPlan p;
@@ -126,7 +126,45 @@ TEST(PlanCheck, WavelengthsMustLieWithinThePhotometers) {
   plan.wavelengths = WavelengthGrid::parse("400:700:5");  // finer, same range: fine
   EXPECT_NO_THROW(check_plan(plan, guard(), kArms));
   plan.wavelengths = WavelengthGrid::parse("350:700:10");
-  EXPECT_NO_THROW(check_plan(plan, guard(), DeviceFacts{{Axis::incidence, Axis::receive}, {}}));
+  EXPECT_NO_THROW(check_plan(plan, guard(), DeviceFacts{{Axis::incidence, Axis::receive}, {}, std::nullopt}));
+}
+
+TEST(PlanCheck, TheFirstGeometryIsOnTheArmsSideOfTheZone) {
+  // The arms at 0°/45° can never reach 45°/−80° (sum −35°): the receive arm would pass the
+  // source arm.
+  DeviceFacts facts = kArms;
+  facts.arms = Geometry::in_plane(0, 45);
+  const auto e = rejection(plan_of({Geometry::in_plane(45, -80), Geometry::in_plane(45, -60)}), facts);
+  EXPECT_EQ(e.code(), Errc::plan_rejected);
+  EXPECT_EQ(e.field(), "geometries[0]");
+  EXPECT_TRUE(mentions(e, "45/-80")) << e.what();
+  EXPECT_TRUE(mentions(e, "other side of the collision zone from the arms, which stand at 0/45")) << e.what();
+  // Without the arms' position, the plan is consistent on its own.
+  EXPECT_NO_THROW(check_plan(plan_of({Geometry::in_plane(45, -80), Geometry::in_plane(45, -60)}), guard(), kArms));
+}
+
+TEST(PlanCheck, AnAdaptivePlansEveryCandidateIsReachable) {
+  // Candidates on both sides of the zone: any order would have to cross it.
+  auto plan = plan_of({Geometry::in_plane(45, -35), Geometry::in_plane(45, 0), Geometry::in_plane(45, -80)});
+  plan.adaptive = AdaptivePlan{};
+  auto e = rejection(plan);
+  EXPECT_EQ(e.field(), "geometries[2]");
+  EXPECT_TRUE(mentions(e, "45/-80")) << e.what();
+  EXPECT_TRUE(mentions(e, "other side of the collision zone from geometries[0] (45/-35)")) << e.what();
+  // A candidate inside the zone is refused as in a plain plan.
+  plan.geometries = {Geometry::in_plane(45, 0), Geometry::in_plane(45, -40)};
+  e = rejection(plan);
+  EXPECT_EQ(e.field(), "geometries[1]");
+  EXPECT_TRUE(mentions(e, "inside the collision zone")) << e.what();
+  // One side, in any order: accepted.
+  plan.geometries = {Geometry::in_plane(45, 80), Geometry::in_plane(45, -35), Geometry::in_plane(30, 0)};
+  DeviceFacts facts = kArms;
+  facts.arms = Geometry::in_plane(0, 45);
+  EXPECT_NO_THROW(check_plan(plan, guard(), facts));
+  // All on the far side of the arms: refused at the first.
+  plan.geometries = {Geometry::in_plane(45, -80), Geometry::in_plane(45, -60)};
+  e = rejection(plan, facts);
+  EXPECT_EQ(e.field(), "geometries[0]");
 }
 
 }  // namespace

@@ -8,7 +8,9 @@
 // floor keeps near-zero tails from demanding points for meaningless relative errors. Among
 // acceptable grids we take one with the fewest points: a shortest path over the graph of
 // admissible segments (exact, O(n³) worst case over the n dense nodes). Refinement lands
-// near peaks and coarsening on flat stretches by construction.
+// near peaks and coarsening on flat stretches by construction. Only receiving angles the
+// arms can reach count (ArmReach: the profile's clearance, on the arms' side of the
+// collision zone), so that the grid can be pasted into a scan as it is.
 #include <algorithm>
 #include <cmath>
 #include <iostream>
@@ -21,6 +23,7 @@
 #include "cli/output.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/text.hpp"
+#include "gonio/twin/design.hpp"
 
 namespace gonio::twin::cli {
 namespace {
@@ -39,6 +42,7 @@ struct Plan {
   std::vector<double> out;      // chosen receiving angles
   std::size_t dense_points = 0;
   double max_error = 0;         // achieved, relative (same measure as the tolerance)
+  std::size_t unreachable = 0;  // dense angles of the range the arms cannot reach
 };
 
 // Indices of the fewest dense nodes whose interpolation meets the tolerance.
@@ -69,13 +73,28 @@ std::vector<std::size_t> minimal_nodes(const std::vector<double>& x, const std::
 
 Plan plan_one(const Twin& twin, const EstimatorOptions& est, unsigned threads, double theta_i,
               double lo, double hi, const PlanOptions& o) {
+  const ArmReach reach(twin.profile());
   std::vector<Geometry> dense;
+  std::size_t unreachable = 0;
   for (double t = lo; t <= hi + 1e-9; t += o.dense_step) {
     const double r = std::round(t * 1e6) / 1e6;
     if (std::abs(std::abs(r) - 90) < 0.1) continue;
-    dense.push_back(Geometry::in_plane(theta_i, r));
+    const auto g = Geometry::in_plane(theta_i, r);
+    if (!reach.reaches(g)) {
+      ++unreachable;
+      continue;
+    }
+    // One side of the zone holds one stretch of the range: no gap to interpolate across.
+    if (!dense.empty() && unreachable > 0 && dense.back().theta_r < r - o.dense_step - 1e-9)
+      throw Error::invalid("range", fmt::format("θi = {:g}°: the arms can reach two separate "
+                                                "stretches of {}:{}; plan each on its own",
+                                                theta_i, lo, hi));
+    dense.push_back(g);
   }
-  if (dense.size() < 2) throw Error::invalid("range", "needs at least two dense points");
+  if (dense.size() < 2)
+    throw Error::invalid("range", fmt::format("θi = {:g}°: needs at least two dense points the arms "
+                                              "can reach (minimum separation {:g}°)",
+                                              theta_i, reach.clearance.min_separation_deg()));
   const auto pred = twin.predict_many(dense, est, threads);
   std::vector<double> x, y;
   for (const auto& p : pred) {
@@ -85,7 +104,7 @@ Plan plan_one(const Twin& twin, const EstimatorOptions& est, unsigned threads, d
   const double peak = *std::max_element(y.begin(), y.end());
   const double floor_abs = o.floor * peak;
   const auto nodes = minimal_nodes(x, y, o.tolerance, floor_abs);
-  Plan plan{theta_i, {}, dense.size(), 0};
+  Plan plan{theta_i, {}, dense.size(), 0, unreachable};
   for (std::size_t s = 0; s + 1 < nodes.size(); ++s)
     for (std::size_t k = nodes[s]; k <= nodes[s + 1]; ++k) {
       const std::size_t i = nodes[s], j = nodes[s + 1];
@@ -137,11 +156,18 @@ void add_plan(CLI::App& app) {
                                       text::format_value_list(plan.out));
         if (o->json) {
           json.push_back({{"theta_i", ti}, {"grid", grid}, {"points", plan.out.size()},
-                          {"dense_points", plan.dense_points}, {"max_error", plan.max_error}});
+                          {"dense_points", plan.dense_points}, {"max_error", plan.max_error},
+                          {"unreachable_points", plan.unreachable}});
         } else {
           std::cout << grid << '\n';
-          std::cerr << fmt::format("# θi = {}°: {} points instead of {} dense, max error {:.2f}%\n",
-                                   ti, plan.out.size(), plan.dense_points, 100 * plan.max_error);
+          std::cerr << fmt::format("# θi = {}°: {} points instead of {} dense, max error {:.2f}%{}\n",
+                                   ti, plan.out.size(), plan.dense_points, 100 * plan.max_error,
+                                   plan.unreachable == 0 ? ""
+                                   : fmt::format("; θr {} {}° left out (the arms cannot reach it)",
+                                                 plan.out.front() > lo + 1e-9 ? "below" : "above",
+                                                 text::format_number(plan.out.front() > lo + 1e-9
+                                                                         ? plan.out.front()
+                                                                         : plan.out.back())));
         }
       }
       if (o->json) std::cout << json.dump(2) << '\n';

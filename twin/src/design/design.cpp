@@ -62,6 +62,35 @@ nlohmann::json DesignStatus::to_json() const {
   return j;
 }
 
+ArmReach::ArmReach(const InstrumentProfile& profile)
+    : clearance(profile.arms.min_separation_deg, "profile.arms.min_separation_deg"),
+      calibration(profile.calibration.geometry),
+      side(clearance.side(calibration)) {}
+
+bool ArmReach::reaches(const Geometry& g) const {
+  return clearance.clear(g) && (!side || clearance.side(g) == side);
+}
+
+std::string ArmReach::why_not(const Geometry& g) const {
+  if (auto why = clearance.why_not_clear(g); !why.empty()) return why;
+  if (side && clearance.side(g) != side)
+    return fmt::format("on the other side of the collision zone from the arms, which work on the "
+                       "side of {} (the calibration geometry): the arms cannot pass through each "
+                       "other (minimum separation {:g}°)",
+                       calibration.to_string(), clearance.min_separation_deg());
+  return {};
+}
+
+void ArmReach::check(const std::vector<Geometry>& candidates, std::string_view field) const {
+  ArmReach reach = *this;
+  if (!reach.side && !candidates.empty()) reach.side = clearance.side(candidates.front());
+  for (std::size_t k = 0; k < candidates.size(); ++k)
+    if (const auto why = reach.why_not(candidates[k]); !why.empty()) {
+      const auto f = fmt::format("{}[{}]", field, k);
+      throw Error(Errc::plan_rejected, fmt::format("{} ({}): {}", f, candidates[k].to_string(), why), f);
+    }
+}
+
 Design::Design(std::vector<Geometry> candidates, int max_readings)
     : candidates_(std::move(candidates)), max_readings_(max_readings) {
   if (candidates_.empty()) throw Error::invalid("geometries", "an adaptive scan needs candidate geometries");

@@ -83,6 +83,13 @@ DesignStudy study_design(const std::string& model, const std::vector<Geometry>& 
   if (!(options.noise_rel >= 0 && options.noise_rel <= 1)) throw Error::out_of_range("noise_rel", options.noise_rel, 0, 1);
   if (!(options.noise_abs > 0 && options.noise_abs <= 1)) throw Error::out_of_range("noise_abs", options.noise_abs, 0, 1);
   const bool parameters = !model.empty();
+  // What goniod would accept: every candidate within the arms' reach, and only moves the
+  // motion guard allows, from the seeds on.
+  const ArmReach reach(profile);
+  reach.check(candidates);
+  const auto movable = [arms = reach.clearance](const Geometry& a, const Geometry& b) {
+    return arms.can_move(a, b);
+  };
   std::string truth = options.truth;
   if (truth.empty()) {
     if (!parameters) throw Error::invalid("truth", "is required in curve mode (the virtual sample)");
@@ -128,10 +135,12 @@ DesignStudy study_design(const std::string& model, const std::vector<Geometry>& 
     for (const auto& p : fit.parameters) out.uniform.status.parameters.push_back({p.name, p.value, p.u});
     out.uniform.status.chi2_per_dof = fit.chi2_per_dof;
     ParameterDesign design(model, candidates, grid, profile, options.parameters);
+    design.set_movable(movable);
     out.adaptive = run_adaptive(design, readings, options.max_points, timing);
   } else {
     out.uniform.status.estimated_error = 0;
     CurveDesign design(candidates, options.curve);
+    design.set_movable(movable);
     out.adaptive = run_adaptive(design, readings, options.max_points, timing);
     double vs_dense = 0, vs_truth = 0;
     const double k = options.curve.coverage_k;

@@ -32,6 +32,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "gonio/proto/arms.hpp"
 #include "gonio/proto/geometry.hpp"
 #include "gonio/proto/spectrum.hpp"
 #include "gonio/twin/fit.hpp"
@@ -51,6 +52,23 @@ struct ScanTiming {
   double point_s(const Geometry& from, const Geometry& to) const { return move_s(from, to) + reading_s; }
   // A whole sequence of geometries, from the arms at `start`.
   double total_s(const Geometry& start, const std::vector<Geometry>& sequence) const;
+};
+
+// Where the arms can go, by the motion guard's rule (proto/arms.hpp) with the profile's
+// clearance: a geometry that keeps arms.min_separation_deg and lies on the arms' side of the
+// collision zone — the side of the profile's calibration geometry (0°/45°), where the arms
+// read the white standard. goniod's plan check refuses the rest; the planners never propose it.
+struct ArmReach {
+  explicit ArmReach(const InstrumentProfile& profile);
+  ArmClearance clearance;
+  Geometry calibration;      // the profile's calibration geometry
+  std::optional<long> side;  // its side; nullopt: it is inside the zone (any side)
+  bool reaches(const Geometry& g) const;
+  // Why not (empty when it does), in goniod's words.
+  std::string why_not(const Geometry& g) const;
+  // Throws Error(plan_rejected) naming `field`[k] and the geometry of the first candidate
+  // the arms cannot reach; with no side of its own, the first candidate's is taken.
+  void check(const std::vector<Geometry>& candidates, std::string_view field = "candidates") const;
 };
 
 enum class DesignState { running, target_reached, max_points };
@@ -246,7 +264,8 @@ struct DesignStudy {
   std::optional<double> error_vs_dense, error_vs_truth;
   nlohmann::json to_json(const std::vector<Geometry>& candidates) const;
 };
-// `model` empty: curve mode. Throws Error naming the field for bad input.
+// `model` empty: curve mode. Throws Error naming the field for bad input, and
+// Error(plan_rejected) for a candidate the arms cannot reach (ArmReach::check), as goniod would.
 DesignStudy study_design(const std::string& model, const std::vector<Geometry>& candidates,
                          const WavelengthGrid& grid, const InstrumentProfile& profile,
                          const DesignStudyOptions& options);

@@ -41,8 +41,10 @@ class AdaptiveLoop {
 
   // The points stored before a restart, in measuring order (blocking: one refit).
   void restore(const std::vector<PointRecord>& points);
-  // The candidate of the first point of this run; nullopt: nothing left to measure.
-  std::optional<std::size_t> first();
+  // The candidate of the first point of this run, the arms standing at `arms` (unknown:
+  // where the last point left them, else at the first seed); nullopt: nothing left to
+  // measure.
+  std::optional<std::size_t> first(const std::optional<Geometry>& arms);
   // Point of candidate `c` is being measured: starts choosing the one after it.
   void measuring(std::size_t c);
   // Point of candidate `c` is stored.

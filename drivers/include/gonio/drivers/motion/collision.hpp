@@ -1,18 +1,8 @@
 // MotionGuard — soft limits of every axis and the collision guard of the two arms,
 // checked before a single byte of a move reaches a device.
 //
-// Arm geometry (docs/architecture.md §2): the source direction for incidence θi is (−sin θi, 0, cos θi)
-// and the receiver direction for θr is (sin θr, 0, cos θr). Both arms turn in the plane
-// of measurement about the same axis, so the angle between them is the in-plane angle
-// between the two directions, |θi + θr| wrapped into [0°, 180°]. The arms collide when that
-// angle drops below the profile's min_separation_deg (InstrumentProfile::Arms). Retro-
-// reflection (θr = −θi) is the collision point itself.
-//
-// Paths matter, not only targets: an arm moving from 30° to −60° sweeps every angle in
-// between. While the arms move, their pair of angles stays in the rectangle spanned by
-// the start and end angles of each, and the separation θi + θr over that rectangle covers
-// the interval between its corner values; a move is allowed when that whole interval keeps
-// the minimum separation (modulo 360°).
+// The geometry — the arms' separation, swept paths, the collision zone — is ArmClearance's
+// (proto/arms.hpp), the rule goniod's plan check and the planners use too.
 //
 // Violations throw Error(limit_violation) whose field is the axis name and whose message
 // names the axis, the target and the limit.
@@ -22,6 +12,7 @@
 #include <optional>
 
 #include "gonio/drivers/motion/motion_controller.hpp"
+#include "gonio/proto/arms.hpp"
 
 namespace gonio::drivers {
 
@@ -36,12 +27,15 @@ class MotionGuard {
   // 0 disables the arm check; must be in [0, 180).
   explicit MotionGuard(double min_separation_deg = 0);
 
-  double min_separation_deg() const noexcept { return min_separation_; }
+  double min_separation_deg() const noexcept { return clearance_.min_separation_deg(); }
+  const ArmClearance& clearance() const noexcept { return clearance_; }
   void set_limits(Axis axis, SoftLimits limits);  // throws Error(out_of_range) if min > max
   const std::optional<SoftLimits>& limits(Axis axis) const noexcept;
 
   // In-plane angle between source and receiver for arm angles θi, θr, in [0, 180].
-  static double arm_separation(double incidence_deg, double receive_deg) noexcept;
+  static double arm_separation(double incidence_deg, double receive_deg) noexcept {
+    return ArmClearance::separation(incidence_deg, receive_deg);
+  }
 
   // Soft limits of `axis` for `target_deg` (also rejects NaN and infinities).
   void check_limits(Axis axis, double target_deg) const;
@@ -55,7 +49,7 @@ class MotionGuard {
   void check_arms(double i0, double i1, double r0, double r1) const;
 
  private:
-  double min_separation_;
+  ArmClearance clearance_;
   std::array<std::optional<SoftLimits>, kAllAxes.size()> limits_{};
 };
 
