@@ -26,8 +26,11 @@ function(gonio_deploy_file src out)
 endfunction()
 gonio_deploy_file(${gonio_systemd_dir}/goniod.service ${gonio_deploy_dir}/goniod.service)
 gonio_deploy_file(${gonio_systemd_dir}/tmpfiles.d/gonio.conf ${gonio_deploy_dir}/tmpfiles.conf)
+gonio_deploy_file(${gonio_systemd_dir}/gonio-backup.service ${gonio_deploy_dir}/gonio-backup.service)
 
-install(FILES ${gonio_deploy_dir}/goniod.service DESTINATION ${GONIO_SYSTEMD_UNITDIR})
+install(FILES ${gonio_deploy_dir}/goniod.service ${gonio_deploy_dir}/gonio-backup.service
+              ${gonio_systemd_dir}/gonio-backup.timer
+        DESTINATION ${GONIO_SYSTEMD_UNITDIR})
 install(FILES ${gonio_systemd_dir}/70-gonio.rules DESTINATION ${GONIO_UDEV_RULESDIR})
 install(FILES ${gonio_systemd_dir}/sysusers.d/gonio.conf DESTINATION ${GONIO_SYSUSERSDIR})
 install(FILES ${gonio_deploy_dir}/tmpfiles.conf DESTINATION ${GONIO_TMPFILESDIR} RENAME gonio.conf)

@@ -9,7 +9,7 @@ r=$root
 
 expected=(
   "$bindir/goniod" "$bindir/gonioctl" "$bindir/gonio-twin" "$bindir/gonio-probe"
-  "$unitdir/goniod.service"
+  "$unitdir/goniod.service" "$unitdir/gonio-backup.service" "$unitdir/gonio-backup.timer"
   "$rulesdir/70-gonio.rules"
   "$sysusersdir/gonio.conf"
   "$tmpfilesdir/gonio.conf"
@@ -64,8 +64,15 @@ want_exec="ExecStart=$bindir/goniod --state-dir /var/lib/gonio --config $confdir
 grep -q -- '--mock' "$unit" && fail "the installed unit runs the mock"
 grep -q "^z $confdir/goniod.toml " "$r$tmpfilesdir/gonio.conf" ||
   fail "tmpfiles.d does not set the mode of $confdir/goniod.toml"
+want_exec="ExecStart=$bindir/gonioctl --state-dir /var/lib/gonio backup --dir /var/backups/gonio --keep-daily 7 --keep-weekly 4"
+[[ $(grep '^ExecStart=' "$r$unitdir/gonio-backup.service") == "$want_exec" ]] ||
+  fail "installed gonio-backup.service: $(grep '^ExecStart=' "$r$unitdir/gonio-backup.service"), expected $want_exec"
+grep -q "^d /var/backups/gonio 0750 gonio gonio " "$r$tmpfilesdir/gonio.conf" ||
+  fail "tmpfiles.d does not make /var/backups/gonio for the nightly copies"
+same "$unitdir/gonio-backup.timer" systemd/gonio-backup.timer
 if [[ $prefix == /usr ]]; then
   same "$unitdir/goniod.service" systemd/goniod.service
+  same "$unitdir/gonio-backup.service" systemd/gonio-backup.service
   same "$tmpfilesdir/gonio.conf" systemd/tmpfiles.d/gonio.conf
 fi
 

@@ -33,6 +33,22 @@ elif [[ -n $out ]]; then
   fail "systemd-analyze verify is not clean:"$'\n'"$out"
 fi
 
+# The nightly copy: a oneshot as goniod's user, its timer, both clean for verify.
+backup=$root$unitdir/gonio-backup.service
+for line in Type=oneshot User=gonio Group=gonio ProtectSystem=strict ReadWritePaths=/var/backups/gonio \
+            "ExecStart=$bindir/gonioctl .* backup --dir /var/backups/gonio --keep-daily [0-9]* --keep-weekly [0-9]*"; do
+  grep -q "^$line" "$backup" || fail "gonio-backup.service has no line matching '^$line'"
+done
+grep -q '^OnCalendar=' "$root$unitdir/gonio-backup.timer" || fail "gonio-backup.timer has no OnCalendar="
+grep -q '^Persistent=true' "$root$unitdir/gonio-backup.timer" || fail "gonio-backup.timer does not catch up a missed night"
+sed "s#^ExecStart=$bindir/#ExecStart=$root$bindir/#" "$backup" >"$tmp/gonio-backup.service"
+cp "$root$unitdir/gonio-backup.timer" "$tmp/gonio-backup.timer"
+if ! out=$(MANPATH=$root$mandir systemd-analyze verify "$tmp/gonio-backup.service" "$tmp/gonio-backup.timer" 2>&1); then
+  fail "systemd-analyze verify of the backup units failed:"$'\n'"$out"
+elif [[ -n $out ]]; then
+  fail "systemd-analyze verify of the backup units is not clean:"$'\n'"$out"
+fi
+
 # --threshold is in tenths: 20 is an exposure of 2.0.
 out=$(systemd-analyze security --offline=true --threshold=20 "$unit" 2>&1) && rc=0 || rc=$?
 exposure=$(sed -n 's/.*Overall exposure level for goniod.service: \([0-9.]*\).*/\1/p' <<<"$out")

@@ -1,11 +1,19 @@
-// gonioctl backup FILE: a consistent copy of goniod's store, made while scans run
+// gonioctl backup FILE | --dir DIR: a consistent copy of goniod's store, made while scans run
 // (backup.create), read back piece by piece (backup.read) over whatever connection gonioctl
-// has, checked against its SHA-256 and only then put in place as FILE.
+// has, checked against its SHA-256 and only then put in place; with --dir, named by its time
+// and followed by the rotation rule (what the nightly gonio-backup.timer runs).
+#include <algorithm>
+#include <chrono>
 #include <cstdint>
+#include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <set>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -50,16 +58,86 @@ std::string fetch(Session& s, const json& made, const fs::path& part) {
   return sha.hex();
 }
 
+// Copies in a rotation directory: goniod-YYYY-MM-DDTHHMMSSZ.db (UTC), so that names sort
+// in time order and the rule below can read their day from them.
+constexpr const char* kRotationName = "goniod-%Y-%m-%dT%H%M%SZ.db";
+
+struct Rotated {
+  fs::path file;
+  std::chrono::sys_days day;
+};
+
+std::optional<Rotated> rotated(const fs::path& file) {
+  const auto name = file.filename().string();
+  int y = 0, mo = 0, d = 0, hms = 0;
+  char tail[8] = {};
+  if (name.size() != 28 || std::sscanf(name.c_str(), "goniod-%4d-%2d-%2dT%6dZ%7s", &y, &mo, &d, &hms, tail) != 5 ||
+      std::string_view(tail) != ".db")
+    return std::nullopt;
+  const std::chrono::year_month_day ymd{std::chrono::year(y), std::chrono::month(static_cast<unsigned>(mo)),
+                                        std::chrono::day(static_cast<unsigned>(d))};
+  if (!ymd.ok()) return std::nullopt;
+  return Rotated{file, std::chrono::sys_days(ymd)};
+}
+
+// The rotation rule: of the copies in `dir`, keep the newest of each of the `daily` most
+// recent days that have one and the newest of each of the `weekly` most recent weeks
+// (Monday to Sunday) that have one; remove the other copies (files of any other name are
+// left alone). Returns the removed ones.
+std::vector<fs::path> rotate(const fs::path& dir, std::size_t daily, std::size_t weekly) {
+  std::vector<Rotated> copies;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (auto r = rotated(e.path()); r && e.is_regular_file()) copies.push_back(*r);
+  std::sort(copies.begin(), copies.end(), [](const Rotated& a, const Rotated& b) { return a.file > b.file; });
+  std::set<std::int64_t> days, weeks;
+  std::vector<fs::path> removed;
+  for (const auto& c : copies) {
+    const auto day = c.day.time_since_epoch().count();
+    // 1970-01-01 was a Thursday: days + 3 counts from a Monday.
+    const auto week = (day + 3) / 7;
+    bool keep = false;
+    if (!days.contains(day) && days.size() < daily) keep = days.insert(day).second;
+    if (!weeks.contains(week) && weeks.size() < weekly) keep = weeks.insert(week).second || keep;
+    if (!keep) {
+      fs::remove(c.file);
+      removed.push_back(c.file);
+    }
+  }
+  return removed;
+}
+
 }  // namespace
 
 void add_backup_commands(CLI::App& app, Context& ctx) {
-  auto file = std::make_shared<std::string>();
+  struct Args {
+    std::string file, dir;
+    std::size_t daily = 7, weekly = 4;
+  };
+  auto args = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
-      "backup", "a consistent copy of goniod's store, made while scans run, written to FILE (role admin)");
-  cmd->add_option("file", *file, "the copy: an SQLite file that goniod --restore takes")->required();
-  cmd->callback([&ctx, file] {
-    ctx.action = [file](Session& s) {
-      const fs::path target = *file;
+      "backup", "a consistent copy of goniod's store, made while scans run, written to FILE or into --dir (role admin)");
+  auto* file_opt = cmd->add_option("file", args->file, "the copy: an SQLite file that goniod --restore takes");
+  auto* dir_opt = cmd->add_option("--dir", args->dir,
+                                  "write the copy into DIR as goniod-<UTC time>.db, then apply the rotation rule to "
+                                  "the copies there")
+                      ->excludes(file_opt);
+  cmd->add_option("--keep-daily", args->daily, "with --dir: keep the newest copy of each of the last N days with one")
+      ->needs(dir_opt);
+  cmd->add_option("--keep-weekly", args->weekly,
+                  "with --dir: … and of each of the last N weeks (Monday to Sunday) with one")
+      ->needs(dir_opt);
+  cmd->callback([&ctx, args, file_opt, dir_opt] {
+    if (!*file_opt && !*dir_opt) throw CLI::RequiredError("FILE or --dir");
+    ctx.action = [args](Session& s) {
+      fs::path target = args->file;
+      if (!args->dir.empty()) {
+        const auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+        std::tm utc{};
+        ::gmtime_r(&now, &utc);
+        char name[64];
+        std::strftime(name, sizeof name, kRotationName, &utc);
+        target = fs::path(args->dir) / name;
+      }
       // Beside the target, so that the rename that puts it in place cannot cross file systems.
       const fs::path part = target.string() + ".part";
       const auto made = s.call("backup.create");
@@ -77,12 +155,17 @@ void add_backup_commands(CLI::App& app, Context& ctx) {
       }
       json result = made;
       result["file"] = target.string();
+      json removed = json::array();
+      if (!args->dir.empty())
+        for (const auto& f : rotate(args->dir, args->daily, args->weekly)) removed.push_back(f.string());
+      result["removed"] = removed;
       print(s.options(), result, [&] {
         std::cout << fmt::format("{}: {:.1f} MiB, schema version {}, {} scans, {} points, sha256 {} "
                                  "(copied in {:.2f} s)\n",
                                  target.string(), made["bytes"].get<double>() / (1 << 20),
                                  made["schema_version"].get<int>(), made["scans"].get<std::int64_t>(),
                                  made["points"].get<std::int64_t>(), sha, made["seconds"].get<double>());
+        for (const auto& f : removed) std::cout << "removed " << f.get<std::string>() << " (rotation)\n";
       });
       return 0;
     };

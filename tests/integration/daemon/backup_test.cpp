@@ -5,6 +5,8 @@
 
 #include <atomic>
 
+#include <fmt/format.h>
+
 #include <gtest/gtest.h>
 
 #include "gonio/test/daemon_harness.hpp"
@@ -175,6 +177,30 @@ TEST(Backup, RestoreRefusesWhatIsNotAnEmptyDirectoryOrNotAGonioStoreTouchingNoth
     const auto unknown = c.request("backup.read", json{{"backup", "0123456789abcdef"}});
     ASSERT_TRUE(unknown.contains("error"));
     EXPECT_EQ(unknown["error"]["data"]["errc"], "not_found");
+
+    // The nightly timer's command: a copy named by its time, then the rotation rule over the
+    // copies already there (two weeks of January 2020, two copies on the 19th) and nothing else.
+    const auto nightly = dir.path / "nightly";
+    fs::create_directories(nightly);
+    for (int day = 6; day <= 19; ++day)
+      std::ofstream(nightly / fmt::format("goniod-2020-01-{:02}T023000Z.db", day)) << "old copy\n";
+    std::ofstream(nightly / "goniod-2020-01-19T120000Z.db") << "old copy\n";
+    std::ofstream(nightly / "README") << "not a copy\n";
+    const auto rr = run_tool("gonioctl", {"--state-dir", (dir.path / "live").string(), "backup", "--dir",
+                                          nightly.string(), "--keep-daily", "3", "--keep-weekly", "3"});
+    ASSERT_EQ(rr.code, 0) << rr.out;
+    auto left = listing(nightly);
+    ASSERT_EQ(left.size(), 5u) << rr.out;
+    // Days: the new copy's, the 19th (its newer copy), the 18th; weeks: the new copy's, the
+    // week of the 13th (its newest, the 19th), the week of the 6th (its newest, the 12th).
+    EXPECT_EQ(left[0], "README");
+    EXPECT_EQ(left[1], "goniod-2020-01-12T023000Z.db");
+    EXPECT_EQ(left[2], "goniod-2020-01-18T023000Z.db");
+    EXPECT_EQ(left[3], "goniod-2020-01-19T120000Z.db");
+    EXPECT_TRUE(left[4].starts_with("goniod-20") && left[4].ends_with("Z.db")) << left[4];
+    EXPECT_EQ(Db(nightly / left[4]).one("PRAGMA integrity_check"), "ok");
+    EXPECT_NE(rr.out.find("removed " + (nightly / "goniod-2020-01-19T023000Z.db").string()), std::string::npos) << rr.out;
+    EXPECT_EQ(run_tool("gonioctl", {"--state-dir", (dir.path / "live").string(), "backup"}).code, 2);
   }
 
   // A state directory that is not empty: named, and left as it was.
