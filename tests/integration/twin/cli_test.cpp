@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <regex>
 #include <sstream>
 #include <string>
 
@@ -167,6 +168,23 @@ TEST(GonioTwinCli, PlanAndDesignKeepToWhatTheArmsCanReach) {
   ASSERT_EQ(r.code, 0) << r.err;
   const auto chosen = r.out.substr(r.out.find("geometries:"));
   EXPECT_EQ(chosen.find("45/-40"), std::string::npos) << chosen;
+}
+
+// A value with its u is rounded to it (GUM §7.2.6): u to two significant digits, the value to
+// the same decimal place ("0.10019 ± 0.00019", not "0.1002 ± 0.00019" or "0.02 ± 9.3e-07").
+TEST(GonioTwinCli, DesignRoundsParametersToTheirUncertainty) {
+  const auto r = gonio_twin("design --model 'conductor:alpha=?,eta=0.2,k=3.9' --bsdf conductor:alpha=0.1,eta=0.2,k=3.9 "
+                            "--wavelengths 550 --grid 'in=45;out=-35:80:5' --max-points 10 --fit-samples 1024");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::regex value(R"(conductor\.alpha = (-?[0-9]+)\.([0-9]+) ± 0\.(0*)([1-9][0-9]?) \()");
+  int lines = 0;
+  for (auto it = std::sregex_iterator(r.out.begin(), r.out.end(), value); it != std::sregex_iterator(); ++it) {
+    const auto& m = *it;
+    // As many decimals in the value as in u, whose significant digits are at most two.
+    EXPECT_EQ(m[2].length(), m[3].length() + m[4].length()) << m[0];
+    ++lines;
+  }
+  EXPECT_EQ(lines, 2) << r.out;  // the uniform grid and the adaptive run
 }
 
 TEST(GonioTwinCli, ConvertRoundTripsThroughBothFormats) {

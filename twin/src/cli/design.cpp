@@ -12,6 +12,7 @@
 #include "cli/common.hpp"
 #include "cli/output.hpp"
 #include "gonio/proto/error.hpp"
+#include "gonio/proto/text.hpp"
 #include "gonio/twin/design.hpp"
 
 namespace gonio::twin::cli {
@@ -33,7 +34,7 @@ struct DesignCliOptions {
 void print_run(const char* label, const DesignRun& r) {
   std::cout << fmt::format("{:<9} {:>4} points  {:>7.0f} s", label, r.chosen.size(), r.seconds);
   for (const auto& p : r.status.parameters)
-    std::cout << fmt::format("  {} = {:.5g} ± {:.2g} ({:.2f} %)", p.name, p.value, p.u,
+    std::cout << fmt::format("  {} = {} ({:.2g} %)", p.name, text::format_measured(p.value, p.u),
                              100 * p.u / std::max(std::abs(p.value), 1e-300));
   if (r.status.estimated_error && label[0] == 'a')
     std::cout << fmt::format("  estimated error {:.2f} %", 100 * *r.status.estimated_error);

@@ -13,6 +13,7 @@
 #include "cli/fit_output.hpp"
 #include "cli/output.hpp"
 #include "gonio/proto/error.hpp"
+#include "gonio/proto/text.hpp"
 #include "gonio/twin/bsdf_io.hpp"
 #include "gonio/twin/color.hpp"
 #include "gonio/twin/in_plane.hpp"
@@ -108,7 +109,7 @@ void write_fit_table(std::ostream& out, const FitResult& r, const std::string& t
 std::vector<std::string> fit_notes(const FitResult& r) {
   std::vector<std::string> out;
   const auto value = [](const FittedParameter& p) {
-    return std::isfinite(p.u) && !p.at_bound ? fmt::format("{:.4g} ± {:.2g}", p.value, p.u)
+    return std::isfinite(p.u) && !p.at_bound ? text::format_measured(p.value, p.u)
                                              : fmt::format("{:.4g}{}", p.value,
                                                            p.at_bound ? " (at bound)" : "");
   };
