@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -22,6 +23,16 @@ namespace gonio::daemon::ctl {
 using nlohmann::json;
 
 namespace {
+
+// A value and its u as two table cells, rounded as GUM §7.2.6 asks (text::format_measured);
+// numbers too small or large for fixed decimals keep 4 significant digits.
+std::pair<std::string, std::string> measured_cells(const json& value, const json& u) {
+  if (!value.is_number() || !u.is_number()) return {cell(value), cell(u)};
+  const auto text = text::format_measured(value.get<double>(), u.get<double>());
+  const auto pm = text.find(" ± ");
+  if (pm == std::string::npos || text.front() == '(') return {cell(value), cell(u)};
+  return {text.substr(0, pm), text.substr(pm + std::string(" ± ").size())};
+}
 
 // The channel at `nm` (within half a nanometre); an error naming the scan's grid otherwise.
 std::size_t channel_at(const json& wl, double nm) {
@@ -55,9 +66,10 @@ void points_table(const json& points, std::optional<double> nm) {
       if (s == "reference_read") continue;
       flags += (flags.empty() ? "" : ",") + s;
     }
-    t.add({cell(p["index"]), cell(p["planned"]["theta_i"]), cell(p["planned"]["theta_r"]), cell(wl[c]),
-           cell(m["values"][c]), cell(m["std_uncertainty"][c]),
-           pr.is_null() ? "-" : cell(pr["values"][c]), pr.is_null() ? "-" : cell(pr["std_uncertainty"][c]),
+    const auto [mv, mu] = measured_cells(m["values"][c], m["std_uncertainty"][c]);
+    const auto [pv, pu] = pr.is_null() ? std::pair<std::string, std::string>{"-", "-"}
+                                       : measured_cells(pr["values"][c], pr["std_uncertainty"][c]);
+    t.add({cell(p["index"]), cell(p["planned"]["theta_i"]), cell(p["planned"]["theta_r"]), cell(wl[c]), mv, mu, pv, pu,
            p["z_max"].is_null() ? "-" : fmt::format("{:.2f}", p["z_max"].get<double>()),
            p["delta_e00"].is_null() ? "-" : fmt::format("{:.2f}", p["delta_e00"].get<double>()), flags});
   }
@@ -177,7 +189,9 @@ void fit_human(const json& f) {
     std::string notes;
     if (p.value("at_bound", false)) notes = "at bound";
     if (!p.value("identifiable", true)) notes += (notes.empty() ? "" : ", ") + std::string("not identifiable");
-    t.add({cell(p["name"]), cell(p["value"]), p["u"].is_null() ? "-" : cell(p["u"]), cell(p["start"]),
+    const auto [value, u] = p["u"].is_null() ? std::pair<std::string, std::string>{cell(p["value"]), "-"}
+                                             : measured_cells(p["value"], p["u"]);
+    t.add({cell(p["name"]), value, u, cell(p["start"]),
            fmt::format("[{}, {}]", cell(p["bounds"][0]), cell(p["bounds"][1])), notes});
   }
   std::cout << t.render();
