@@ -11,8 +11,10 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <csignal>
+#include <cstdlib>
 #include <cstdint>
 #include <cstring>
 #include <iterator>
@@ -34,10 +36,10 @@ int remaining_ms(Clock::time_point deadline) {
   return ms < 0 ? 0 : static_cast<int>(std::min<long long>(ms, 1 << 30));
 }
 
-// tcp://HOST:PORT, tls://HOST:PORT, [IPv6]:PORT → host and port.
+// tcp://HOST:PORT, tls://HOST:PORT, https://HOST:PORT/rpc, [IPv6]:PORT → host and port.
 std::pair<std::string, std::string> host_port(const std::string& uri) {
   std::string rest = uri.substr(uri.find("://") + 3);
-  if (!rest.empty() && rest.back() == '/') rest.pop_back();
+  rest = rest.substr(0, rest.find('/'));
   if (!rest.empty() && rest.front() == '[') {
     const auto close = rest.find("]:");
     if (close == std::string::npos) throw ConnectionError(fmt::format("{}: bad address", uri));
@@ -76,7 +78,8 @@ int connect_uri(const std::string& uri, std::chrono::milliseconds timeout) {
     }
     return fd;
   }
-  if (uri.starts_with("tcp://") || uri.starts_with("tls://")) {
+  if (uri.starts_with("tcp://") || uri.starts_with("tls://") || uri.starts_with("http://") ||
+      uri.starts_with("https://")) {
     const auto [host, port] = host_port(uri);
     addrinfo hints{};
     hints.ai_socktype = SOCK_STREAM;
@@ -115,12 +118,14 @@ int connect_uri(const std::string& uri, std::chrono::milliseconds timeout) {
     if (fd < 0) throw ConnectionError(fmt::format("cannot connect to {}: {}", uri, last));
     return fd;
   }
-  throw ConnectionError(fmt::format("'{}' is not unix:PATH, tcp://HOST:PORT or tls://HOST:PORT", uri));
+  throw ConnectionError(fmt::format("'{}' is not unix:PATH, tcp://HOST:PORT, tls://HOST:PORT, "
+                                    "http://HOST:PORT or https://HOST:PORT", uri));
 }
 
 Client::Client(const std::string& uri, std::chrono::milliseconds timeout, const std::string& ca)
-    : fd_(connect_uri(uri, timeout)), uri_(uri), timeout_(timeout) {
-  if (!uri.starts_with("tls://")) return;
+    : fd_(connect_uri(uri, timeout)), http_(uri.starts_with("http://") || uri.starts_with("https://")),
+      uri_(uri), timeout_(timeout) {
+  if (!uri.starts_with("tls://") && !uri.starts_with("https://")) return;
   try {
     start_tls(ca);
   } catch (...) {
@@ -139,7 +144,8 @@ void Client::close_connection() noexcept {
 }
 
 Client::Client(Client&& o) noexcept
-    : fd_(o.fd_), tls_ctx_(o.tls_ctx_), tls_(o.tls_), uri_(std::move(o.uri_)), timeout_(o.timeout_),
+    : fd_(o.fd_), tls_ctx_(o.tls_ctx_), tls_(o.tls_), http_(o.http_), token_(std::move(o.token_)),
+      uri_(std::move(o.uri_)), timeout_(o.timeout_),
       buffer_(std::move(o.buffer_)), consumed_(o.consumed_), notifications_(std::move(o.notifications_)),
       next_id_(o.next_id_) {
   o.fd_ = -1;
@@ -255,6 +261,37 @@ std::optional<std::string_view> Client::next_line(std::chrono::milliseconds time
   }
 }
 
+// HTTP/1.1 (RFC 9112): the body of the next response, by its Content-Length; valid until
+// the next read. Any status: goniod's refusals carry a JSON-RPC error as their body.
+std::optional<std::string_view> Client::next_body(std::chrono::milliseconds timeout) {
+  const auto deadline = Clock::now() + timeout;
+  buffer_.erase(0, consumed_);
+  consumed_ = 0;
+  for (;;) {
+    if (const auto end = buffer_.find("\r\n\r\n"); end != std::string::npos) {
+      std::string head = buffer_.substr(0, end);
+      for (auto& ch : head) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+      const auto at = head.find("\r\ncontent-length:");
+      if (at == std::string::npos) throw ConnectionError(fmt::format("{}: a response without Content-Length", uri_));
+      const auto length = std::strtoull(head.c_str() + at + 17, nullptr, 10);
+      if (buffer_.size() >= end + 4 + length) {
+        consumed_ = end + 4 + length;
+        return std::string_view(buffer_.data() + end + 4, length);
+      }
+    }
+    if (!tls_ || SSL_pending(tls_) == 0) {
+      pollfd p{fd_, POLLIN, 0};
+      const int rc = ::poll(&p, 1, remaining_ms(deadline));
+      if (rc < 0 && errno == EINTR) continue;
+      if (rc < 0) throw ConnectionError(fmt::format("{}: poll: {}", uri_, std::strerror(errno)));
+      if (rc == 0) return std::nullopt;
+    }
+    char buf[65536];
+    const auto n = receive(buf, sizeof buf);
+    buffer_.append(buf, static_cast<std::size_t>(n));
+  }
+}
+
 std::optional<std::string> Client::read_line(std::chrono::milliseconds timeout) {
   const auto line = next_line(timeout);
   if (!line) return std::nullopt;
@@ -264,8 +301,20 @@ std::optional<std::string> Client::read_line(std::chrono::milliseconds timeout) 
 std::int64_t Client::send_request(const std::string& method, const json& params) {
   const auto id = next_id_++;
   out_.clear();
-  fmt::format_to(std::back_inserter(out_), R"({{"jsonrpc":"2.0","id":{},"method":{},"params":{}}})"
-                 "\n", id, json(method).dump(), params.dump());
+  if (http_) {  // POST /rpc, one call per request on a kept-alive connection
+    const auto body = fmt::format(R"({{"jsonrpc":"2.0","id":{},"method":{},"params":{}}})", id,
+                                  json(method).dump(), params.dump());
+    const auto [host, port] = host_port(uri_);
+    const bool v6 = host.find(':') != std::string::npos;
+    fmt::format_to(std::back_inserter(out_),
+                   "POST /rpc HTTP/1.1\r\nHost: {}{}{}:{}\r\nContent-Type: application/json\r\n"
+                   "Content-Length: {}\r\n{}\r\n{}",
+                   v6 ? "[" : "", host, v6 ? "]" : "", port, body.size(),
+                   token_.empty() ? std::string() : "Authorization: Bearer " + token_ + "\r\n", body);
+  } else {
+    fmt::format_to(std::back_inserter(out_), R"({{"jsonrpc":"2.0","id":{},"method":{},"params":{}}})"
+                   "\n", id, json(method).dump(), params.dump());
+  }
   send_all(out_);
   return id;
 }
@@ -335,7 +384,8 @@ struct Envelope : nlohmann::json_sax<json> {
 void Client::await(std::int64_t id, const std::string& method, bool full, json& msg) {
   const auto deadline = Clock::now() + timeout_;
   for (;;) {
-    const auto line = next_line(std::chrono::milliseconds(remaining_ms(deadline)));
+    const auto wait = std::chrono::milliseconds(remaining_ms(deadline));
+    const auto line = http_ ? next_body(wait) : next_line(wait);
     if (!line) throw ConnectionError(fmt::format("{}: no answer to {} within {} s", uri_, method,
                                                  timeout_.count() / 1000.0));
     if (!full) {
@@ -370,9 +420,14 @@ void Client::call_checked(const std::string& method, const json& params) {
   await(send_request(method, params), method, false, msg);
 }
 
-json Client::login(const std::string& token) { return call("auth.login", json{{"token", token}}); }
+json Client::login(const std::string& token) {
+  if (http_) token_ = token;  // over HTTP every request carries it (Authorization: Bearer)
+  return call("auth.login", json{{"token", token}});
+}
 
 std::optional<json> Client::next_notification(std::chrono::milliseconds timeout) {
+  if (http_)
+    throw ConnectionError(fmt::format("{}: HTTP carries no notifications: connect with unix:, tcp:// or tls://", uri_));
   if (!notifications_.empty()) {
     auto n = std::move(notifications_.front());
     notifications_.pop_front();

@@ -158,8 +158,9 @@ int gonioctl_main(int argc, char** argv) {
   o.state_dir = ctl::default_state_dir();
   app.add_option("--state-dir", o.state_dir, "goniod's state dir (socket and admin.token); "
                                              "default $GONIO_STATE_DIR or /var/lib/gonio");
-  app.add_option("--connect", o.connect, "unix:PATH, tcp://HOST:PORT or tls://HOST:PORT (default: the state dir's socket)");
-  app.add_option("--ca", o.ca, "tls://: the CA certificates (PEM) the server's certificate must chain to "
+  app.add_option("--connect", o.connect, "unix:PATH, tcp://HOST:PORT, tls://HOST:PORT or https://HOST:PORT "
+                                         "(default: the state dir's socket)");
+  app.add_option("--ca", o.ca, "tls://, https://: the CA certificates (PEM) the server's certificate must chain to "
                                "(default: the system's)")->check(CLI::ExistingFile);
   app.add_option("--token", o.token, "bearer token (TCP)");
   app.add_option("--token-file", o.token_file, "file holding the bearer token (TCP)");

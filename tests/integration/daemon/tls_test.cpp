@@ -43,13 +43,13 @@ struct Pki {
 
   Pki() {
     const auto r = run("cd " + q(dir.path) +
-                       " && printf 'subjectAltName=IP:127.0.0.1,DNS:localhost\\n' > server.ext"
+                       " && printf 'subjectAltName=IP:127.0.0.1\\n' > server.ext"
                        " && openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:P-256 -nodes -keyout ca.key"
                        " -out ca.pem -subj '/CN=gonio test CA' -days 2");
     if (r.rc != 0) throw std::runtime_error("openssl: " + r.out);
   }
   // NAME.pem and NAME.key (mode 0600) for subject CN `cn`, signed by `issuer` ("ca" or
-  // another CA made by make_ca); `server`: a server certificate for 127.0.0.1 and localhost.
+  // another CA made by make_ca); `server`: a server certificate for 127.0.0.1 (not localhost).
   // `faketime`: the time it is made at (libfaketime), to make one that has expired.
   void issue(const std::string& name, const std::string& cn, bool server, const std::string& issuer = "ca",
              const std::string& faketime = {}) {
@@ -201,7 +201,7 @@ TEST(Tls, OnlyTls12And13AreSpokenAndTheCertificateVerifies) {
   }
 }
 
-TEST(Tls, CurlPostsJsonRpcOverHttpsAndGonioctlCallsOverTls) {
+TEST(Tls, CurlPostsJsonRpcOverHttpsAndGonioctlCallsOverTlsAndHttps) {
   Pki pki;
   pki.issue("server", "goniod-test", true);
   TempDir dir;
@@ -228,9 +228,19 @@ TEST(Tls, CurlPostsJsonRpcOverHttpsAndGonioctlCallsOverTls) {
   EXPECT_EQ(refused.rc, 3) << refused.out;  // cannot connect
   EXPECT_NE(refused.out.find("the server's certificate is not trusted"), std::string::npos) << refused.out;
   EXPECT_NE(refused.out.find("--ca"), std::string::npos) << refused.out;
-  // A certificate for another name: refused even with the CA.
-  const auto wrong_host = run(bin("gonioctl") + " --connect tls://[::1]:1 --ca " + q(pki.ca) + " info");
+  // gonioctl over https:// (POST /rpc, the token as a bearer header), verified the same way.
+  const auto over_https = run(bin("gonioctl") + " --connect " + https + " --ca " + q(pki.ca) + " --token " + token +
+                              " --json call auth.whoami");
+  ASSERT_EQ(over_https.rc, 0) << over_https.out;
+  EXPECT_EQ(json::parse(over_https.out)["transport"], "https") << over_https.out;
+  const auto https_refused = run(bin("gonioctl") + " --connect " + https + " --token " + token + " info");
+  EXPECT_EQ(https_refused.rc, 3) << https_refused.out;
+  EXPECT_NE(https_refused.out.find("the server's certificate is not trusted"), std::string::npos) << https_refused.out;
+  // The same server by a name its certificate does not carry: refused even with the CA.
+  const auto wrong_host = run(bin("gonioctl") + " --connect tls://localhost:" + std::to_string(port_of(tls)) +
+                              " --ca " + q(pki.ca) + " --token " + token + " info");
   EXPECT_EQ(wrong_host.rc, 3) << wrong_host.out;
+  EXPECT_NE(wrong_host.out.find("hostname mismatch"), std::string::npos) << wrong_host.out;
 }
 
 TEST(Tls, AHandshakeThatNeverFinishesIsCutAtTheDeadline) {

@@ -1,6 +1,7 @@
 // A blocking JSON-RPC client over the NDJSON transports (unix:PATH, tcp://HOST:PORT and
-// tls://HOST:PORT), for gonioctl and gonio-load. Plain POSIX sockets, and OpenSSL over them
-// for tls://: a command-line client needs no event loop.
+// tls://HOST:PORT) and HTTP POST /rpc (http://HOST:PORT, https://HOST:PORT: no
+// notifications), for gonioctl and gonio-load. Plain POSIX sockets, and OpenSSL over them
+// for tls:// and https://: a command-line client needs no event loop.
 //
 // Notifications that arrive while waiting for a response are kept, in order, for
 // next_notification().
@@ -42,7 +43,7 @@ class ConnectionError : public std::runtime_error {
 
 class Client {
  public:
-  // Throws ConnectionError. tls://: the server's certificate must be signed by a CA of `ca`
+  // Throws ConnectionError. tls://, https://: the server's certificate must be signed by a CA of `ca`
   // (a PEM file; empty: the system's) and name the host of the URI.
   Client(const std::string& uri, std::chrono::milliseconds timeout = std::chrono::seconds(30),
          const std::string& ca = {});
@@ -63,7 +64,7 @@ class Client {
   // measures the server rather than its own allocation of the answer's tree.
   void call_checked(const std::string& method, const nlohmann::json& params = nlohmann::json::object());
 
-  // auth.login with a token (needed on TCP).
+  // auth.login with a token (needed on TCP and TLS; over HTTP every request then carries it).
   nlohmann::json login(const std::string& token);
 
   // The next notification (buffered or read), nullopt after `timeout` without one.
@@ -86,10 +87,14 @@ class Client {
   void await(std::int64_t id, const std::string& method, bool full, nlohmann::json& msg);
   // The next line, valid until the next read; nullopt after `timeout` without one.
   std::optional<std::string_view> next_line(std::chrono::milliseconds timeout);
+  // The same for http:// and https://: the next response's body.
+  std::optional<std::string_view> next_body(std::chrono::milliseconds timeout);
 
   int fd_ = -1;
   ssl_ctx_st* tls_ctx_ = nullptr;  // tls://
   ssl_st* tls_ = nullptr;
+  bool http_ = false;  // http://, https://: POST /rpc
+  std::string token_;  // http://, https://: the bearer token of every request
   std::string uri_;
   std::chrono::milliseconds timeout_;
   // Received bytes; those before consumed_ are lines already returned. Kept (with its
@@ -101,7 +106,7 @@ class Client {
   std::int64_t next_id_ = 1;
 };
 
-// unix:PATH / tcp://HOST:PORT / tls://HOST:PORT → a connected socket fd (TCP for tls://);
+// unix:PATH / tcp:// / tls:// / http:// / https://HOST:PORT → a connected socket fd (TCP but for unix:);
 // throws ConnectionError.
 int connect_uri(const std::string& uri, std::chrono::milliseconds timeout);
 
