@@ -152,6 +152,34 @@ class TlsConn {
       buf_.append(b, static_cast<std::size_t>(n));
     }
   }
+  // Raw bytes out, and in until `until` has arrived (or the connection ends).
+  void send_raw(const std::string& bytes) {
+    if (SSL_write(ssl_, bytes.data(), static_cast<int>(bytes.size())) <= 0) throw std::runtime_error("TLS write: " + openssl_error());
+  }
+  std::string read_until(const std::string& until) {
+    while (buf_.find(until) == std::string::npos) {
+      char b[16384];
+      const int n = SSL_read(ssl_, b, sizeof b);
+      if (n <= 0) break;
+      buf_.append(b, static_cast<std::size_t>(n));
+    }
+    const auto at = buf_.find(until);
+    const auto end = at == std::string::npos ? buf_.size() : at + until.size();
+    auto out = buf_.substr(0, end);
+    buf_.erase(0, end);
+    return out;
+  }
+  std::string read_exact(std::size_t n) {
+    while (buf_.size() < n) {
+      char b[16384];
+      const int r = SSL_read(ssl_, b, sizeof b);
+      if (r <= 0) throw std::runtime_error("TLS read: the connection ended");
+      buf_.append(b, static_cast<std::size_t>(r));
+    }
+    auto out = buf_.substr(0, n);
+    buf_.erase(0, n);
+    return out;
+  }
   // Writes `bytes` without reading; false once the connection has ended.
   bool write_all(const std::string& bytes) {
     int small = 4096;  // the kernel takes little of what goniod writes back
@@ -241,6 +269,35 @@ TEST(Tls, CurlPostsJsonRpcOverHttpsAndGonioctlCallsOverTlsAndHttps) {
                               " --ca " + q(pki.ca) + " --token " + token + " info");
   EXPECT_EQ(wrong_host.rc, 3) << wrong_host.out;
   EXPECT_NE(wrong_host.out.find("hostname mismatch"), std::string::npos) << wrong_host.out;
+}
+
+// The dashboard's WebSocket over TLS: wss://HOST:PORT/ws, the bearer header at the upgrade.
+TEST(Tls, AWebSocketOverHttpsIsWss) {
+  Pki pki;
+  pki.issue("server", "goniod-test", true);
+  TempDir dir;
+  Goniod g(dir.path, tls_config(tls_section(pki, "server")));
+  TlsConn c(port_of(g.uri("https://")), pki.ca);
+  c.send_raw("GET /ws HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+             "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n"
+             "Authorization: Bearer " + g.admin_token() + "\r\n\r\n");
+  const auto head = c.read_until("\r\n\r\n");
+  ASSERT_TRUE(head.starts_with("HTTP/1.1 101")) << head;
+  // One masked text frame (RFC 6455 §5.2), a payload under 126 bytes.
+  const std::string call = json{{"jsonrpc", "2.0"}, {"id", 1}, {"method", "auth.whoami"}}.dump();
+  std::string frame{static_cast<char>(0x81), static_cast<char>(0x80 | call.size()), 1, 2, 3, 4};
+  for (std::size_t i = 0; i < call.size(); ++i) frame += static_cast<char>(call[i] ^ (1 + i % 4));
+  c.send_raw(frame);
+  const auto h = c.read_exact(2);
+  ASSERT_EQ(static_cast<unsigned char>(h[0]), 0x81u);  // a final text frame, unmasked
+  std::size_t n = static_cast<unsigned char>(h[1]);
+  if (n == 126) {
+    const auto ext = c.read_exact(2);
+    n = (static_cast<std::size_t>(static_cast<unsigned char>(ext[0])) << 8) | static_cast<unsigned char>(ext[1]);
+  }
+  const auto answer = json::parse(c.read_exact(n));
+  EXPECT_EQ(answer["result"]["transport"], "wss") << answer.dump();
+  EXPECT_EQ(answer["result"]["role"], "admin") << answer.dump();
 }
 
 TEST(Tls, AHandshakeThatNeverFinishesIsCutAtTheDeadline) {
