@@ -212,9 +212,12 @@ void ScanEvidence::add_bands(const WavelengthGrid& wavelengths) {
         names_.push_back(std::move(c));
       }
   }
-  if (!spectra.empty() || wavelengths.size() == 0) return;
-  // No spectral parameter: β itself over the verdict's wavelength bands (up to three, as
-  // band_of_ splits the channels), contiguous runs of them.
+  // A catalogue with no parameter at all (a master, a table): β itself over the verdict's
+  // wavelength bands (up to three, as band_of_ splits the channels), contiguous runs of them.
+  // A formula's change is one of its parameters; a scale of its β is not one (and would tie
+  // with the white's gain wherever the formula has no spectral parameter).
+  const bool has_parameters = std::any_of(names_.begin(), names_.end(), [](const Column& c) { return c.kind == "sample"; });
+  if (has_parameters || wavelengths.size() == 0) return;
   const std::size_t channels = wavelengths.size(), bands = std::min<std::size_t>(3, channels);
   for (std::size_t lo = 0; lo < bands; ++lo)
     for (std::size_t hi = lo; hi < bands; ++hi) {

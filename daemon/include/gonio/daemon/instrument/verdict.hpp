@@ -30,8 +30,8 @@
 // cause; fewer than three: undecided.
 //
 // A spectral parameter's nodes are also tried as contiguous bands moving together and as the
-// whole spectrum scaled (one free scale each); a catalogue without one (a master, a scalar
-// formula) is tried as its β scaled over contiguous wavelength bands and over the whole
+// whole spectrum scaled (one free scale each); a catalogue with no parameter at all (a master,
+// a table) is tried as its β scaled over contiguous wavelength bands and over the whole
 // spectrum, named `catalogue@LO-HI`. Such a scale is exactly what a reference-white gain
 // does: the two tie, and the verdict says so. A cause is named only when it explains: the χ²
 // left after it must be consistent with its degrees of freedom (p ≥ kConsistent). When no
@@ -145,8 +145,8 @@ class ScanEvidence {
     // A band: the nodes (sample columns) scaled together; its θ is the relative change.
     std::vector<std::size_t> members;
     double band_lo = 0, band_hi = 0;
-    // The catalogue's β scaled over channels [first, last) (a catalogue without spectral
-    // parameters: a master, a scalar formula); its θ is the relative change.
+    // The catalogue's β scaled over channels [first, last) (a catalogue with no parameter: a
+    // master, a table); its θ is the relative change.
     std::size_t first_channel = 0, last_channel = 0;
     bool band() const { return !members.empty() || last_channel > first_channel; }
   };
