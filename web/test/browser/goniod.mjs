@@ -13,16 +13,17 @@ export class Goniod {
   // exe: the goniod binary; webRoot: the built dist/ (null: server.web_root not set, so goniod
   // looks for its own); timeScale: the mock's real seconds per virtual second (small: fast
   // scans); sample: the mock lab's hidden sample; lab: more keys of the mock lab
-  // ([instrument.motion], e.g. its detector's full scale).
-  constructor({ exe, webRoot, timeScale = 0.3, extra = '', sample = TRUE_SAMPLE, lab = '' }) {
-    Object.assign(this, { exe, webRoot, timeScale, extra, sample, lab });
+  // ([instrument.motion], e.g. its detector's full scale); tls: { cert, key } files for an
+  // https:// listener instead of the http:// one.
+  constructor({ exe, webRoot, timeScale = 0.3, extra = '', sample = TRUE_SAMPLE, lab = '', tls = null }) {
+    Object.assign(this, { exe, webRoot, timeScale, extra, sample, lab, tls });
     this.state = mkdtempSync(join(tmpdir(), 'gonio-web-'));
     this.port = 0;
   }
 
   config() {
     return `[server]
-listen = ["http://127.0.0.1:${this.port}"]
+listen = ["${this.tls ? 'https' : 'http'}://127.0.0.1:${this.port}"]
 ${this.webRoot === null ? '' : `web_root = "${this.webRoot}"\n`}log_level = "debug"
 
 [instrument.motion]
@@ -38,7 +39,7 @@ driver = "mock"
 threads = 1
 rel_se = 0.01
 replicates = 8
-${this.extra}`;
+${this.tls ? `\n[server.tls]\ncert = "${this.tls.cert}"\nkey = "${this.tls.key}"\n` : ''}${this.extra}`;
   }
 
   async start() {
@@ -54,9 +55,10 @@ ${this.extra}`;
       await sleep(50);
     }
     const ep = JSON.parse(readFileSync(join(this.state, 'endpoints.json'), 'utf8'));
-    const http = ep.listen.find((u) => u.startsWith('http://'));
+    const scheme = this.tls ? 'https' : 'http';
+    const http = ep.listen.find((u) => u.startsWith(`${scheme}://`));
     this.port = Number(http.slice(http.lastIndexOf(':') + 1));
-    this.url = `http://127.0.0.1:${this.port}`;
+    this.url = `${scheme}://127.0.0.1:${this.port}`;
     this.adminToken = readFileSync(join(this.state, 'admin.token'), 'utf8').trim();
     return this;
   }
