@@ -196,6 +196,13 @@ TEST(GonioTwinCli, ConvertRoundTripsThroughBothFormats) {
   ASSERT_EQ(r.code, 0) << r.err;
   r = gonio_twin("convert --input " + ssdd + " --output " + issa);
   ASSERT_EQ(r.code, 0) << r.err;
+  // What was written and how big: the file's own size.
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.out, m, std::regex(R"(wrote (\S+) \(([0-9.]+) (B|kB|MB|GB), )"))) << r.out;
+  EXPECT_EQ(m[1].str(), issa);
+  const double scale = m[3] == "B" ? 1 : m[3] == "kB" ? 1e3 : m[3] == "MB" ? 1e6 : 1e9;
+  EXPECT_NEAR(std::stod(m[2].str()) * scale, static_cast<double>(std::filesystem::file_size(issa)), 0.06 * scale)
+      << r.out;
   // The converted table is a BSDF the twin can measure again.
   r = gonio_twin("predict --bsdf @" + issa + " --in 30 --out 30 --wavelengths 550 --rel-se 0.01 --json");
   ASSERT_EQ(r.code, 0) << r.err;

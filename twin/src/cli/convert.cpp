@@ -15,6 +15,7 @@
 
 #include "cli/common.hpp"
 #include "cli/output.hpp"
+#include "cli/progress.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/bsdf_io.hpp"
 #include "gonio/twin/color.hpp"
@@ -98,7 +99,9 @@ void add_convert(CLI::App& app) {
       if (*binary) ssdd.data = SsddData::binary;
       ssdd.name_entry = false;  // a comment: no reader uses NAME
       const auto t0 = std::chrono::steady_clock::now();
+      Ticker ticker("convert");
       if (!input->empty()) {
+        ticker.step("reading " + *input);
         if (!model->bsdf.empty())
           throw Error::invalid("input", "give either --input FILE or --bsdf SPEC, not both");
         parts = read_bsdf_file(*input);
@@ -127,6 +130,7 @@ void add_convert(CLI::App& app) {
         if (*virtual_measurement) {
           std::cerr << fmt::format("measuring {} geometries ...\n",
                                    specular_geometries(grid).geometries.size());
+          ticker.step(fmt::format("measuring {} geometries", specular_geometries(grid).geometries.size()));
           parts.brdf = measure_specular(twin, grid, model->estimator_options(), model->threads);
           parts.name = "virtually measured " + bsdf.spec();
           ssdd.device = twin.profile().name;
@@ -152,6 +156,7 @@ void add_convert(CLI::App& app) {
                                  "{:+.2f} % at θi = {:g}°\n", 100 * worst, worst_ti);
       }
       std::vector<std::string> warnings;
+      ticker.step("writing " + *output);
       try {
         warnings = write_bsdf_file(*output, parts, issa_options(parts, *monochrome), ssdd);
       } catch (const Error& e) {
@@ -161,7 +166,7 @@ void add_convert(CLI::App& app) {
       for (const auto& w : warnings) std::cerr << "warning: " << w << '\n';
       const double secs =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::cout << fmt::format("wrote {} ({:.1f} s)\n", *output, secs);
+      std::cout << fmt::format("wrote {} ({}, {:.1f} s)\n", *output, file_size_text(*output), secs);
       return kExitOk;
     });
   });

@@ -21,6 +21,7 @@
 #include "cli/common.hpp"
 #include "cli/error_map_plot.hpp"
 #include "cli/output.hpp"
+#include "cli/progress.hpp"
 #include "gonio/proto/error.hpp"
 
 namespace gonio::twin::cli {
@@ -140,7 +141,8 @@ void add_error_map(CLI::App& app) {
         if (!std::isnan(s.grazing_mean_relative_error))
           fmt::print("  grazing (≥ 70°)      {:+.2f}% mean relative error\n",
                      100 * s.grazing_mean_relative_error);
-        fmt::print("wrote {} and {}\n", csv_path, png_path);
+        fmt::print("wrote {} ({}) and {} ({})\n", csv_path, file_size_text(csv_path), png_path,
+                   file_size_text(png_path));
       }
       return kExitOk;
     });

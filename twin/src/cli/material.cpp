@@ -9,6 +9,7 @@
 
 #include "cli/common.hpp"
 #include "cli/output.hpp"
+#include "cli/progress.hpp"
 #include "gonio/proto/enum_text.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/material.hpp"
@@ -62,7 +63,7 @@ void print_report(const material::ExportReport& r, const std::string& output, do
                              "mean {:.4f} %\n", 100 * r.merl->max_rel, r.merl->theta_i, r.merl->theta_r,
                              100 * r.merl->mean_rel);
   for (const auto& n : r.notes) std::cout << "note: " << n << '\n';
-  std::cout << fmt::format("wrote {} ({:.1f} s)\n", output, secs);
+  std::cout << fmt::format("wrote {} ({}, {:.1f} s)\n", output, file_size_text(output), secs);
 }
 
 }  // namespace

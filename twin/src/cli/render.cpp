@@ -3,6 +3,7 @@
 // noise, with the CIEDE2000 map of each against the true one (twin/rendering.md).
 #include <chrono>
 #include <ctime>
+#include <filesystem>
 #include <iostream>
 
 #include <fmt/format.h>
@@ -10,6 +11,7 @@
 
 #include "cli/common.hpp"
 #include "cli/output.hpp"
+#include "cli/progress.hpp"
 #include "gonio/proto/enum_text.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/twin/render.hpp"
@@ -141,6 +143,7 @@ void add_render(CLI::App& app) {
     exit_code() = guarded([&] {
       const auto t0 = std::chrono::steady_clock::now();
       const auto c_start = std::clock();
+      Ticker ticker("render");
       auto opts = *ro;
       parse_environment(*environment, opts.lighting);
       opts.tone_map = parse_enum<ToneMap>(*tone, "--tone-map");
@@ -158,6 +161,7 @@ void add_render(CLI::App& app) {
       const auto grid = specular_measurement_grid(*theta_step, *radial_step, *phi_step);
       const auto n_geo = specular_geometries(grid).geometries.size();
       std::cerr << fmt::format("measuring {} geometries ...\n", n_geo);
+      ticker.step(fmt::format("measuring {} geometries", n_geo));
       const auto tm = std::chrono::steady_clock::now();
       const auto c_measure = std::clock();
       TabulatedParts parts;
@@ -185,9 +189,11 @@ void add_render(CLI::App& app) {
         names.emplace_back("corrected");
         captions.emplace_back("corrected");
       }
+      ticker.step("rendering the spheres and ΔE00 maps");
       const auto c_render = std::clock();
       const auto r = render_comparison(bsdfs, captions, opts);
       const double render_cpu = cpu_seconds_since(c_render);
+      ticker.step("writing " + *output);
       write_png(r.image, *output);
       const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       const double total_cpu = cpu_seconds_since(c_start);
@@ -208,6 +214,7 @@ void add_render(CLI::App& app) {
       if (*json) {
         nlohmann::json j;
         j["output"] = *output;
+        j["bytes"] = std::filesystem::file_size(*output);
         j["size"] = opts.size;
         j["seconds"] = total;
         j["cpu_seconds"] = total_cpu;
@@ -240,8 +247,8 @@ void add_render(CLI::App& app) {
               "pixels)\n",
               names[k + 1], names[0], s.mean, s.noise_mean, s.p95, s.max, s.pixels);
         }
-        std::cout << fmt::format("wrote {} ({:.1f} s, measurement {:.1f} s)\n", *output, total,
-                                 measure_s);
+        std::cout << fmt::format("wrote {} ({}, {:.1f} s, measurement {:.1f} s)\n", *output,
+                                 file_size_text(*output), total, measure_s);
       }
       return kExitOk;
     });
