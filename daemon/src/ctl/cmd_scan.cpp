@@ -1,6 +1,7 @@
 // gonioctl scan: submit, get, list, pause, resume, cancel, points, export, fit, material, watch.
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -362,11 +363,14 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
       }
       r["points"] = points;
       if (path == "-") return 0;
-      if (!out) throw Error(Errc::io_error, fmt::format("cannot write {}", path));
+      file.close();
+      if (!file) throw Error(Errc::io_error, fmt::format("cannot write {}", path));
+      const auto bytes = std::filesystem::file_size(path);
       if (s.options().json)
-        std::cout << json{{"file", path}, {"format", r["format"]}, {"points", r["points"]}}.dump(2) << "\n";
+        std::cout << json{{"file", path}, {"format", r["format"]}, {"points", r["points"]}, {"bytes", bytes}}.dump(2) << "\n";
       else
-        std::cout << fmt::format("wrote {} ({} points, {})\n", path, cell(r["points"]), cell(r["format"]));
+        std::cout << fmt::format("wrote {} ({} points, {}, {} bytes)\n", path, cell(r["points"]), cell(r["format"]),
+                                 bytes);
       return 0;
     };
   });

@@ -62,6 +62,8 @@ TEST(Gonioctl, CommandsTablesJsonAndExitCodes) {
   r = gonioctl({"--state-dir", sd, "scan", "export", "1", "--format", "csv", "-o", file});
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(fs::file_size(file) > 100);
+  EXPECT_NE(r.out.find(fmt::format("wrote {} (5 points, csv, {} bytes)", file, fs::file_size(file))), std::string::npos)
+      << r.out;
   // A fitted material written for a renderer: a scan without a fit is refused (exit 6),
   // then the fit's Mitsuba scene is written to a file.
   const auto xml = (dir.path / "tile.xml").string();

@@ -21,11 +21,12 @@ void ModelOptions::add_to(CLI::App& app, bool need_bsdf) {
   app.add_option("--estimator", estimator, "rqmc or baseline")
       ->check(CLI::IsMember({"rqmc", "baseline"}))
       ->capture_default_str();
-  app.add_option("--rel-se", rel_se, "target relative standard error per channel")
+  app.add_option("--rel-se", rel_se, "target relative standard error per channel (goniod's [twin] rel_se: 0.002, "
+                 "looser so that a prediction keeps up with the arms)")
       ->capture_default_str();
-  app.add_option("--max-samples", max_samples, "sample budget per geometry")
+  app.add_option("--max-samples", max_samples, "sample budget per geometry (goniod's [twin] max_samples: 1048576)")
       ->capture_default_str();
-  app.add_option("--replicates", replicates, "independent randomisations (standard error)")
+  app.add_option("--replicates", replicates, "independent randomisations (standard error; goniod's [twin] replicates: 16)")
       ->capture_default_str();
   app.add_option("--seed", seed, "random seed (results are deterministic per seed)")
       ->capture_default_str();
