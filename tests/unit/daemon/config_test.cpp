@@ -172,6 +172,22 @@ TEST(Config, RemoteListenNeedsOptIn) {
   EXPECT_TRUE(ListenUri::parse("unix:/x").loopback());
 }
 
+TEST(Config, TlsListenersNeedACertificateAndItsKey) {
+  const auto c = Config::parse("[server]\nlisten = [\"tls://127.0.0.1:7443\", \"https://[::1]:8443\"]\n"
+                               "[server.tls]\ncert = \"/etc/gonio/tls/goniod.pem\"\nkey = \"/etc/gonio/tls/goniod.key\"\n");
+  ASSERT_EQ(c.listen.size(), 2u);
+  EXPECT_EQ(c.listen[0].kind, ListenUri::Kind::tls);
+  EXPECT_EQ(c.listen[1].to_string(), "https://[::1]:8443");
+  EXPECT_TRUE(c.listen[1].tls() && c.listen[1].loopback());
+  EXPECT_EQ(c.tls.key, "/etc/gonio/tls/goniod.key");
+  // Files are checked when goniod loads them (net::check_tls_files), not when parsed.
+  EXPECT_EQ(field_of("[server]\nlisten = [\"tls://127.0.0.1:7443\"]\n"), "server.listen[0]");
+  EXPECT_EQ(field_of("[server.tls]\ncert = \"/c.pem\"\n"), "server.tls.key");
+  EXPECT_EQ(field_of("[server.tls]\ncert = \"c.pem\"\nkey = \"/k.pem\"\n"), "server.tls.cert");
+  EXPECT_EQ(field_of("[server.tls]\nclient_ca = \"/ca.pem\"\n"), "server.tls.client_ca");
+  EXPECT_EQ(field_of("[server.tls]\ncertificate = \"/c.pem\"\n"), "server.tls.certificate");
+}
+
 TEST(Config, ExamplesParseAndTheirDriverTablesAreValid) {
   const auto mock = Config::load(GONIO_SOURCE_DIR "/daemon/examples/goniod-mock.toml");
   EXPECT_EQ(mock.motion["driver"], "mock");
