@@ -44,9 +44,11 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <optional>
@@ -428,27 +430,41 @@ struct Options {
   std::size_t clients = 64;
   double seconds = 5, time_scale = 1;
   int rounds = 3;  // the baselines and system.info alternate this many times
-  bool as_json = false, hostile = false, throughput = false;
+  bool as_json = false, hostile = false, throughput = false, tls = false;
   std::optional<double> client_share;  // server.client_share_busy of the goniod it starts
   std::optional<int> io_threads;       // server.io_threads of the goniod it starts
 };
 
-// goniod --mock in a fresh state directory with a TCP listener, stopped and removed at the end.
+// goniod --mock in a fresh state directory with a TCP listener (--tls: a TLS one, with a
+// self-signed certificate that openssl makes there, which the clients then trust as their
+// CA), stopped and removed at the end.
 class Goniod {
  public:
-  Goniod(std::string exe, double time_scale, std::optional<double> client_share, std::optional<int> io_threads) {
+  Goniod(std::string exe, double time_scale, std::optional<double> client_share, std::optional<int> io_threads,
+         bool tls) {
     std::string tmpl = (fs::temp_directory_path() / "gonio-load-XXXXXX").string();
     if (!::mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed");
     dir_ = tmpl;
     if (exe.empty()) exe = (fs::read_symlink("/proc/self/exe").parent_path() / "goniod").string();
+    const auto cert = dir_ / "tls.pem", key = dir_ / "tls.key";
+    if (tls) {
+      const auto cmd = fmt::format("openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:P-256 -nodes -days 1 "
+                                   "-subj /CN=127.0.0.1 -addext subjectAltName=IP:127.0.0.1 -keyout '{}' -out '{}' "
+                                   ">/dev/null 2>&1", key.string(), cert.string());
+      if (std::system(cmd.c_str()) != 0) throw std::runtime_error("--tls: openssl could not make a certificate");
+      fs::permissions(key, fs::perms::owner_read | fs::perms::owner_write);
+      g_ca = cert.string();
+    }
+    const std::string scheme = tls ? "tls://" : "tcp://";
     {
       std::ofstream cfg(dir_ / "load.toml");
-      cfg << "[server]\nlog_level = \"warn\"\nlisten = [\"tcp://127.0.0.1:0\"]\n"
+      cfg << "[server]\nlog_level = \"warn\"\nlisten = [\"" << scheme << "127.0.0.1:0\"]\n"
           << (client_share ? fmt::format("client_share_busy = {}\n", *client_share) : std::string())
           << (io_threads ? fmt::format("io_threads = {}\n", *io_threads) : std::string())
           << "max_connections = 4096\n\n[instrument.motion]\ndriver = \"mock\"\n"
           << fmt::format("sample = \"{}\"\ntime_scale = {}\n\n", gonio::daemon::kDemoSampleBsdf, time_scale)
-          << "[instrument.photometer]\ndriver = \"mock\"\n";
+          << "[instrument.photometer]\ndriver = \"mock\"\n"
+          << (tls ? fmt::format("\n[server.tls]\ncert = \"{}\"\nkey = \"{}\"\n", cert.string(), key.string()) : "");
     }
     pid_ = ::fork();
     if (pid_ == 0) {
@@ -465,7 +481,7 @@ class Goniod {
       const auto ep = json::parse(in, nullptr, false);
       if (ep.is_object())
         for (const auto& l : ep["listen"])
-          if (l.get<std::string>().starts_with("tcp://")) uri_ = l.get<std::string>();
+          if (l.get<std::string>().starts_with(scheme)) uri_ = l.get<std::string>();
     }
     if (uri_.empty()) {
       ::kill(pid_, SIGTERM);  // the state directory stays, for its log
@@ -697,9 +713,10 @@ void print(const Report& rep, const Options& o) {
   }
   std::cout << t.render() << ratios;
   std::cout << fmt::format("connect: a new connection and auth.login p50 {:.3f} ms, its first system.info p50 {:.3f} ms "
-                           "({} connections, one at a time)\n",
+                           "({} connections, one at a time); goniod's CPU per connection {} ms\n",
                            rep.connect["connect_login_p50_ms"].get<double>(), rep.connect["first_call_p50_ms"].get<double>(),
-                           rep.connect["connections"].get<int>());
+                           rep.connect["connections"].get<int>(),
+                           gonio::daemon::cell(rep.connect["server_cpu_ms_per_connection"]));
   std::cout << fmt::format(
       "goniod: rss {:.1f} MiB; scan {} {} with {} points measured during the run; runner's own time "
       "per point p50 {} ms, p99 {} ms, max {} ms (last {} points)\n",
@@ -729,10 +746,12 @@ void print(const Report& rep, const Options& o) {
 }
 
 // A new connection's cost, one at a time: connect (and the TLS handshake on tls://) and
-// auth.login, then one system.info; each phase's median over kConnects connections.
-json measure_connect(const std::string& uri, const std::string& token) {
+// auth.login, then one system.info; each phase's median over kConnects connections, and
+// the server's CPU per connection (`cpu`: its CPU seconds so far; NAN when not known).
+json measure_connect(const std::string& uri, const std::string& token, const std::function<double()>& cpu) {
   constexpr int kConnects = 200;
   std::vector<double> setup, first;
+  const double cpu0 = cpu();
   for (int i = 0; i < kConnects; ++i) {
     const auto t0 = Clock::now();
     Client c(uri, std::chrono::seconds(10), g_ca);
@@ -746,7 +765,9 @@ json measure_connect(const std::string& uri, const std::string& token) {
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
     return v[v.size() / 2];
   };
-  return {{"connections", kConnects}, {"connect_login_p50_ms", median(setup)}, {"first_call_p50_ms", median(first)}};
+  const double server_ms = 1000 * (cpu() - cpu0) / kConnects;
+  return {{"connections", kConnects}, {"connect_login_p50_ms", median(setup)}, {"first_call_p50_ms", median(first)},
+          {"server_cpu_ms_per_connection", std::isfinite(server_ms) ? json(server_ms) : json(nullptr)}};
 }
 
 // Every target against goniod (its own, or the one at --connect), the echo baseline first.
@@ -754,7 +775,7 @@ void run(Options o) {
   std::optional<Goniod> own;
   std::string uri = o.connect, token = o.token;
   if (uri.empty()) {
-    own.emplace(o.goniod, o.time_scale, o.client_share, o.io_threads);
+    own.emplace(o.goniod, o.time_scale, o.client_share, o.io_threads, o.tls);
     uri = own->uri();
     token = own->token();
   } else if (token.empty() && !o.token_file.empty()) {
@@ -764,7 +785,7 @@ void run(Options o) {
   Client admin(uri, std::chrono::seconds(30), g_ca);
   if (!token.empty()) admin.login(token);
   Report rep;
-  rep.connect = measure_connect(uri, token);
+  rep.connect = measure_connect(uri, token, [&] { return own ? process_cpu_seconds(own->pid()) : NAN; });
   if (own) {
     rep.scan_id = start_scan(admin, false);
   } else {
@@ -821,6 +842,7 @@ int main(int argc, char** argv) {
   app.add_option("--goniod", o.goniod, "goniod to start (default: next to gonio-load)");
   app.add_option("--connect", o.connect, "measure a running goniod at tcp://HOST:PORT or tls://HOST:PORT instead");
   app.add_option("--ca", g_ca, "with --connect tls://: the CA file of goniod's certificate");
+  app.add_flag("--tls", o.tls, "the goniod it starts listens on tls:// (a self-signed certificate) and the clients use it");
   app.add_option("--token", o.token, "bearer token for --connect");
   app.add_option("--token-file", o.token_file, "file with the token for --connect");
   app.add_option("--clients", o.clients, "concurrent clients")->check(CLI::Range(1, 1024));
