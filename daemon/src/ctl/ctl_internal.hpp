@@ -22,9 +22,9 @@ namespace gonio::daemon::ctl {
 
 struct Options {
   std::string state_dir;
-  std::string connect;  // unix:PATH, tcp:// or tls://HOST:PORT; default unix:<state-dir>/goniod.sock
+  std::string connect;  // unix:PATH, tcp://, tls:// or https://HOST:PORT; default unix:<state-dir>/goniod.sock
   std::string token, token_file;
-  std::string ca;  // tls://: the CA file the server's certificate must chain to (else the system's)
+  std::string ca;  // tls://, https://: the CA file the server's certificate must chain to (else the system's)
   bool json = false;
   double timeout_s = 120;
 };

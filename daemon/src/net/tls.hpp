@@ -33,7 +33,6 @@ class TlsServer {
   }
   // Re-reads the files; throws Error naming the key, and the context in use stays.
   void reload();
-  bool asks_for_client_certificates() const { return !files_.client_ca.empty(); }
 
  private:
   Config::Tls files_;
