@@ -408,6 +408,11 @@ void store_keys(std::vector<ConfigKey>& k) {
                      "raised and no new scan starts; a store made read-only by a full disk takes "
                      "writes again once this plus the 1 MiB reserve is free",
                      " MiB"));
+  k.push_back(number("store", "retention_days", field(&C::retention_days), 0, 36500,
+                     "points of finished scans older than this (days) that the central archive has "
+                     "committed are pruned and their space returned; the scans, their verdicts and "
+                     "fits stay. 0: keep every point. Without `[archive]` nothing is pruned",
+                     " days"));
 }
 
 // [instrument]: the profile, the drivers, timeouts, ranging, recovery
@@ -438,11 +443,6 @@ void instrument_keys(std::vector<ConfigKey>& k) {
                if (r.has("integration_ms"))
                  c.integration_ms = r.optional_in<double>("integration_ms", 100, 0.001, 3600000, " ms");
              },
-  k.push_back(number("store", "retention_days", field(&C::retention_days), 0, 36500,
-                     "points of finished scans older than this (days) that the central archive has "
-                     "committed are pruned and their space returned; the scans, their verdicts and "
-                     "fits stay. 0: keep every point. Without `[archive]` nothing is pruned",
-                     " days"));
              [](const Config& c) { return c.integration_ms ? json(*c.integration_ms) : json(); }),
       "the photometer's own setting when goniod first reads it"));
   k.push_back(number("instrument", "integration_min_ms", field(&C::integration_min_ms), 0.001, 3600000,

@@ -177,6 +177,7 @@ int gonioctl_main(int argc, char** argv) {
   ctl::add_queue_commands(app, ctx);
   ctl::add_alert_commands(app, ctx);
   ctl::add_archive_commands(app, ctx);
+  ctl::add_backup_commands(app, ctx);
   ctl::add_twin_commands(app, ctx);
   ctl::add_token_commands(app, ctx);
   ctl::add_demo_commands(app, ctx);
@@ -217,4 +218,3 @@ int gonioctl_main(int argc, char** argv) {
 }
 
 }  // namespace gonio::daemon
-  ctl::add_backup_commands(app, ctx);

@@ -563,6 +563,8 @@ int run_daemon(const DaemonOptions& o) {
     Instrument instrument(config, *store, twin, alerts, hub);
 
     auto telemetry = make_telemetry(config, *store, alerts, instrument);
+    RetentionKeeper retention(*store, config.retention_days, telemetry.archive != nullptr);
+    retention.start();
     // Unhooks the publisher from the hub before it goes, however this scope is left.
     struct Untap {
       Hub& hub;
@@ -603,8 +605,6 @@ int run_daemon(const DaemonOptions& o) {
                       [&listeners](JsonWriter& w) {
                         for (const auto& l : listeners) {
                           w.begin_object();
-    RetentionKeeper retention(*store, config.retention_days, telemetry.archive != nullptr);
-    retention.start();
                           l->write_stats(w);
                           w.end_object();
                         }

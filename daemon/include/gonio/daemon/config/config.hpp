@@ -148,6 +148,9 @@ struct Config {
   // Below this much free space in the state directory a `storage` warning is raised and no
   // new scan starts; a store made read-only by a full disk writes again above it (+ reserve).
   double min_free_mb = 64;
+  // Points of finished scans older than this that the central archive has committed are
+  // pruned (store/retention.hpp); 0: kept for ever.
+  double retention_days = 0;
 
   // [instrument]
   std::string profile = "gcms4";  // preset name or JSON profile path
@@ -156,9 +159,6 @@ struct Config {
   milliseconds move_timeout{60000};
   milliseconds home_timeout{120000};
   milliseconds measure_timeout{30000};
-  // Points of finished scans older than this that the central archive has committed are
-  // pruned (store/retention.hpp); 0: kept for ever.
-  double retention_days = 0;
   milliseconds settle{0};
   // Auto-ranging (autorange.hpp): each point starts at integration_ms (unset: the
   // photometer's own setting when goniod first reads it), saturation shortens it down to
