@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "gonio/test/daemon_harness.hpp"
@@ -67,9 +68,17 @@ TEST(Hostile, AmplifyingBatchesAreRefusedBeforeTheyCostMemory) {
 }
 
 TEST(Hostile, ResponsesOverTheLimitBecomeErrorsNotPartialReplies) {
+  // Two rpc.discover answers fit, the third does not: the limit is 2.5 answers, measured on
+  // a first goniod (the document grows with the API).
+  std::size_t answer = 0;
+  {
+    TempDir first;
+    Goniod g(first.path, with_server(""));
+    auto c = g.unix_conn();
+    answer = json{{"jsonrpc", "2.0"}, {"id", 0}, {"result", c.call("rpc.discover")}}.dump().size();
+  }
   TempDir dir;
-  // Two rpc.discover answers (about 50 kB each) fit, the third does not.
-  Goniod g(dir.path, with_server("max_response_bytes = 125000\n"));
+  Goniod g(dir.path, with_server(fmt::format("max_response_bytes = {}\n", answer * 5 / 2)));
   auto c = g.unix_conn();
   std::string batch = "[";
   for (int i = 0; i < 5; ++i) batch += (i ? "," : "") + json{{"jsonrpc", "2.0"}, {"id", i}, {"method", "rpc.discover"}}.dump();
