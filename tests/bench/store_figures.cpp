@@ -131,9 +131,7 @@ int backup(std::size_t points, std::size_t per_scan, const std::string& dir_opt)
     fmt::print("built a store of {} points in {:.1f} s: {:.1f} MiB\n", points, seconds_since(t0), mib(on_disk(db)));
   }
   Store s(db);  // as goniod runs it: synchronous = FULL
-  const auto sample = make_sample(s);
-  (void)sample;
-  const auto running = s.insert_scan(make_plan(1, 1000000), true, "bench");
+  const auto running = s.insert_scan(make_plan(1, 20000), true, "bench");
   s.set_scan_state(running.id, ScanState::running, "", "bench");
 
   Writer alone{s, running.id};
