@@ -243,14 +243,20 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
   submit->add_option("--model", a->model, "--adaptive parameters: BSDF spec with '?' marks");
   submit->add_option("--target-rel-u", a->target_rel_u, "--adaptive parameters: stop at this relative u")
       ->capture_default_str();
-  submit->add_option("--tolerance", a->tolerance, "--adaptive curve: stop at this relative error")
-      ->capture_default_str();
+  auto* curve_error =
+      submit->add_option("--curve-error", a->tolerance, "--adaptive curve: stop at this estimated relative error")
+          ->capture_default_str();
+  // The old name: --tolerance is the sample's acceptance limit (sample create).
+  auto* old_name = submit->add_option("--tolerance", a->tolerance)->group("");
   submit->add_option("--max-points", a->max_points, "--adaptive: at most this many points")->capture_default_str();
   auto* watch_flag = submit->add_flag("--watch", a->watch, "follow the scan until it ends, then print its verdict");
   submit->add_flag("--exit-status", a->exit_status,
                    "with --watch: exit 10 when the verdict is out_of_tolerance, 11 when instrument_out_of_spec")
       ->needs(watch_flag);
-  submit->callback([&ctx, a] {
+  submit->callback([&ctx, a, old_name, curve_error] {
+    if (old_name->count() > 0 && curve_error->count() > 0)
+      throw CLI::ValidationError("--tolerance", "give --curve-error alone (--tolerance is its old name here)");
+    if (old_name->count() > 0) std::cerr << "gonioctl: --tolerance is now --curve-error here (--tolerance is a sample's acceptance limit)\n";
     ctx.action = [a](Session& s) {
       json p{{"sample", sample_ref(a->sample)},
              {"wavelengths", a->wavelengths},

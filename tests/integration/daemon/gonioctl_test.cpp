@@ -221,6 +221,12 @@ TEST(Gonioctl, ErrorsNameTheNextStep) {
   r = gonioctl({"--state-dir", sd, "scan", "lsit"});
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("did you mean 'list'?"), std::string::npos) << r.out;
+  // --tolerance is the sample's acceptance limit; the adaptive curve's error is --curve-error
+  // (the old spelling still works, with a note, but not beside the new one).
+  r = gonioctl({"--state-dir", sd, "scan", "submit", "--sample", "paint", "--grid", "in=45;out=0:40:10", "--adaptive",
+                "curve", "--tolerance", "0.05", "--curve-error", "0.05"});
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("give --curve-error alone"), std::string::npos) << r.out;
   // A token file that is not there is that, not "a token is needed".
   const auto missing = (dir.path / "no.token").string();
   r = gonioctl({"--state-dir", sd, "--connect", g.uri("tcp://"), "--token-file", missing, "info"});

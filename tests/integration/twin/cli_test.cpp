@@ -127,7 +127,7 @@ TEST(GonioTwinCli, ErrorMapWritesCsvPlotAndSummary) {
 
 TEST(GonioTwinCli, PlanPrintsAGridThatParsesBack) {
   const auto r = gonio_twin("plan --bsdf conductor:alpha=0.1,eta=0.2,k=3.9 --in 45 --range 0:80 "
-                            "--dense-step 1 --tolerance 0.02 --rel-se 0.002 --wavelengths 550");
+                            "--dense-step 1 --curve-error 0.02 --rel-se 0.002 --wavelengths 550");
   ASSERT_EQ(r.code, 0) << r.err;
   ASSERT_EQ(r.out.rfind("in=45;out=0,", 0), 0u) << r.out;
   const auto line = r.out.substr(0, r.out.find('\n'));
@@ -140,9 +140,11 @@ TEST(GonioTwinCli, PlanPrintsAGridThatParsesBack) {
 // The planners propose only what the arms can reach (the profile's 10° clearance, on the
 // side of its 0°/45° calibration geometry), so that their grids paste into a scan as they are.
 TEST(GonioTwinCli, PlanAndDesignKeepToWhatTheArmsCanReach) {
+  // (--tolerance, the old name of --curve-error, still works and says so.)
   auto r = gonio_twin("plan --bsdf conductor:alpha=0.1,eta=0.2,k=3.9 --in 45 --dense-step 1 "
                       "--tolerance 0.02 --rel-se 0.002 --wavelengths 550");
   ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("--tolerance is now --curve-error"), std::string::npos) << r.err;
   const auto line = r.out.substr(0, r.out.find('\n'));
   const gonio::ArmClearance arms(10);
   const auto grid = gonio::parse_geometry_grid(line);

@@ -53,8 +53,11 @@ void add_design(CLI::App& app) {
   sub->add_option("--grid", o->grids, "candidate geometries (grid syntax, repeatable)")->required();
   sub->add_option("--target-rel-u", o->target_rel_u, "parameters mode: stop at this relative u")
       ->capture_default_str();
-  sub->add_option("--tolerance", o->tolerance, "curve mode: stop at this estimated relative error")
-      ->capture_default_str();
+  auto* curve_error =
+      sub->add_option("--curve-error", o->tolerance, "curve mode: stop at this estimated relative error")
+          ->capture_default_str();
+  // The old name: --tolerance is a sample's acceptance limit everywhere else (gonioctl).
+  auto* old_name = sub->add_option("--tolerance", o->tolerance)->group("");
   sub->add_option("--max-points", o->max_points, "at most this many points")->capture_default_str();
   sub->add_option("--noise-rel", o->noise_rel, "virtual readings' relative noise (k = 1)")->capture_default_str();
   sub->add_option("--noise-abs", o->noise_abs, "virtual readings' absolute noise in β (k = 1)")
@@ -64,8 +67,11 @@ void add_design(CLI::App& app) {
   sub->add_option("--reading", o->timing.reading_s, "reading time per point, s")->capture_default_str();
   sub->add_option("--fit-samples", o->fit_samples, "twin paths per geometry in the refits")->capture_default_str();
   sub->add_flag("--json", o->json, "JSON output");
-  sub->callback([model, o] {
+  sub->callback([model, o, old_name, curve_error] {
     exit_code() = guarded([&] {
+      if (old_name->count() > 0 && curve_error->count() > 0)
+        throw Error::invalid("tolerance", "give --curve-error alone (--tolerance is its old name)");
+      if (old_name->count() > 0) std::cerr << "gonio-twin design: --tolerance is now --curve-error\n";
       if (o->curve == !o->model.empty())
         throw Error::invalid("model", "give either --model SPEC (parameters mode) or --curve");
       std::vector<Geometry> candidates;

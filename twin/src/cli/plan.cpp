@@ -128,18 +128,23 @@ void add_plan(CLI::App& app) {
   sub->add_option("--range", o->range, "receiving-angle range LO:HI, degrees")->capture_default_str();
   sub->add_option("--dense-step", o->dense_step, "step of the dense reference curve, degrees")
       ->capture_default_str();
-  sub->add_option("--tolerance", o->tolerance, "largest relative interpolation error")
-      ->capture_default_str();
+  auto* curve_error = sub->add_option("--curve-error", o->tolerance, "largest relative interpolation error")
+                          ->capture_default_str();
+  // The old name: --tolerance is a sample's acceptance limit everywhere else (gonioctl).
+  auto* old_name = sub->add_option("--tolerance", o->tolerance)->group("");
   sub->add_option("--floor", o->floor,
                   "errors are relative to max(β, floor × peak): tails below it count absolutely")
       ->capture_default_str();
   sub->add_flag("--json", o->json, "JSON output");
-  sub->callback([model, o] {
+  sub->callback([model, o, old_name, curve_error] {
     exit_code() = guarded([&] {
+      if (old_name->count() > 0 && curve_error->count() > 0)
+        throw Error::invalid("tolerance", "give --curve-error alone (--tolerance is its old name)");
+      if (old_name->count() > 0) std::cerr << "gonio-twin plan: --tolerance is now --curve-error\n";
       if (!(o->dense_step >= 0.05 && o->dense_step <= 10))
         throw Error::out_of_range("dense-step", o->dense_step, 0.05, 10, "°");
       if (!(o->tolerance >= 3 * model->rel_se && o->tolerance <= 1))
-        throw Error::out_of_range("tolerance", o->tolerance, 3 * model->rel_se, 1);
+        throw Error::out_of_range("curve-error", o->tolerance, 3 * model->rel_se, 1);
       if (!(o->floor >= 0 && o->floor <= 1)) throw Error::out_of_range("floor", o->floor, 0, 1);
       const auto parts = text::split(o->range, ':');
       if (parts.size() != 2) throw Error::invalid("range", "expected LO:HI, e.g. -85:85");
