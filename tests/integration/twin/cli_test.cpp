@@ -234,9 +234,10 @@ TEST(GonioTwinCli, ConvertKeepsEnergyAndColor) {
   TempDir dir;
   const auto issa = (dir.path() / "g.bsdf").string();
   auto r = gonio_twin("convert --bsdf conductor:alpha=0.1,eta=0.2,k=3.9 --wavelengths 450,550,650 "
-                      "--theta-step 17 --output " + issa);
+                      "--theta-step 17 --grid-error 0.02 --output " + issa);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("lobe-following grid"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("(grid error 0.02)"), std::string::npos) << r.err;
   std::ifstream in(issa);
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("SpectralContent\tXYZ"), std::string::npos);

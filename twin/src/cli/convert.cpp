@@ -4,7 +4,7 @@
 //
 // A model is tabulated in the specular parametrization (IS-SA's native one) on a grid that
 // follows the lobe (lobe_grid): radial and azimuthal nodes refined until interpolation stays
-// within --tolerance of the model, then checked for energy — the table's directional
+// within --grid-error of the model, then checked for energy — the table's directional
 // reflectance, integrated as readers interpolate it, within 2 % of the model's at every θi.
 // A spherical grid of fixed steps cannot do that: a lobe a few degrees wide sampled at its
 // peak is spread over a whole cell (3.6 instead of 0.84 at θi = 85° for α = 0.1).
@@ -83,9 +83,11 @@ void add_convert(CLI::App& app) {
   sub->add_option("--phi-step", *phi_step,
                   "model: the coarsest azimuth step about the specular direction, degrees")
       ->capture_default_str();
-  sub->add_option("--tolerance", *tolerance,
-                  "model: largest relative interpolation error of the lobe-following grid")
-      ->capture_default_str();
+  auto* grid_error = sub->add_option("--grid-error", *tolerance,
+                                     "model: largest relative interpolation error of the lobe-following grid")
+                         ->capture_default_str();
+  // The old name: --tolerance is a sample's acceptance limit everywhere else (gonioctl).
+  auto* old_name = sub->add_option("--tolerance", *tolerance)->group("");
   sub->add_flag("--virtual", *virtual_measurement,
                 "model: fill the grid with the instrument's virtual measurement instead of the "
                 "true BSDF");
@@ -94,6 +96,9 @@ void add_convert(CLI::App& app) {
   sub->add_flag("--binary", *binary, ".ssdd: binary data (float32) instead of text");
   sub->callback([=] {
     exit_code() = guarded([&] {
+      if (old_name->count() > 0 && grid_error->count() > 0)
+        throw Error::invalid("tolerance", "give --grid-error alone (--tolerance is its old name)");
+      if (old_name->count() > 0) std::cerr << "gonio-twin convert: --tolerance is now --grid-error\n";
       TabulatedParts parts;
       SsddWriteOptions ssdd;
       if (*binary) ssdd.data = SsddData::binary;
@@ -111,7 +116,7 @@ void add_convert(CLI::App& app) {
         if (!(*theta_step >= 0.5 && *theta_step <= 45))
           throw Error::out_of_range("theta-step", *theta_step, 0.5, 45, "°");
         if (!(*tolerance >= 0.002 && *tolerance <= 0.5))
-          throw Error::out_of_range("tolerance", *tolerance, 0.002, 0.5);
+          throw Error::out_of_range("grid-error", *tolerance, 0.002, 0.5);
         const auto twin = model->make_twin();
         const Bsdf& bsdf = twin.sample();
         LobeGridOptions lo;
@@ -125,7 +130,7 @@ void add_convert(CLI::App& app) {
         LobeGridReport rep;
         const SpecularGrid grid = lobe_grid(bsdf, lo, &rep);
         std::cerr << fmt::format(
-            "lobe-following grid: {} θi × {} radial × {} azimuth nodes (tolerance {:g})\n",
+            "lobe-following grid: {} θi × {} radial × {} azimuth nodes (grid error {:g})\n",
             grid.theta_i.size(), grid.radial.size(), grid.azimuth.size(), rep.tolerance);
         if (*virtual_measurement) {
           std::cerr << fmt::format("measuring {} geometries ...\n",
