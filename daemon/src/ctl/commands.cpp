@@ -185,7 +185,6 @@ int gonioctl_main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : ctl_exit::usage;
     // A mistyped command: the near names instead of CLI11's "a subcommand is required".
     if (e.get_exit_code() != 0) {
       std::vector<std::string> args(argv + 1, argv + argc);
@@ -194,6 +193,7 @@ int gonioctl_main(int argc, char** argv) {
         return ctl_exit::usage;
       }
     }
+    return app.exit(e) == 0 ? 0 : ctl_exit::usage;
   }
   // Connects on first use, so local commands never do.
   ctl::Session session(o);
