@@ -126,7 +126,8 @@ std::string response_text(const json& id, Result result) {
   std::string body;
   const std::string* text = &body;
   if (std::holds_alternative<json>(result)) body = std::get<json>(result).dump(-1, ' ', false, kInvalidUtf8);
-  else text = std::get<RawJson>(result).shared.get();
+  else if (const auto& raw = std::get<RawJson>(result); raw.shared) text = raw.shared.get();
+  else text = &raw.text;  // written as text without room for the envelope
   std::string out;
   out.reserve(text->size() + envelope);
   out += kHead;

@@ -203,5 +203,18 @@ TEST(Dispatcher, ABatchRunsAWindowAtATimeAndStaysWithinTheResponseLimit) {
   EXPECT_LE(out.size(), 200u + 400u);
 }
 
+// A result written as text is wrapped whether or not it left room for the envelope (one
+// without room used to be read as a shared text that was not there).
+TEST(Response, RawTextWithAndWithoutRoomForTheEnvelope) {
+  const std::string want = R"({"jsonrpc":"2.0","result":{"a":1},"id":7})";
+  std::string tight = R"({"a":1})";
+  tight.shrink_to_fit();
+  EXPECT_EQ(response_text(7, Result(RawJson(tight))), want);
+  std::string roomy = R"({"a":1})";
+  roomy.reserve(256);
+  EXPECT_EQ(response_text(7, Result(RawJson(std::move(roomy)))), want);
+  EXPECT_EQ(response_text(7, Result(RawJson({}, std::make_shared<const std::string>(R"({"a":1})")))), want);
+}
+
 }  // namespace
 }  // namespace gonio::daemon::rpc
