@@ -451,7 +451,10 @@ TEST(Tls, CheckConfigRefusesBadFilesNamingTheKey) {
   const auto expired = check(tls_section(pki, "expired"));
   EXPECT_EQ(expired.rc, 2) << expired.out;
   EXPECT_NE(expired.out.find("server.tls.cert"), std::string::npos) << expired.out;
-  EXPECT_NE(expired.out.find("expired on Jan  2 00:00:00 2020 GMT"), std::string::npos) << expired.out;
+  // Made a day long at 2020-01-01 00:00 under libfaketime, whose clock runs on while openssl
+  // works: the second is not fixed.
+  EXPECT_NE(expired.out.find("expired on Jan  2 00:00:"), std::string::npos) << expired.out;
+  EXPECT_NE(expired.out.find(" 2020 GMT"), std::string::npos) << expired.out;
 
   const auto missing = check("\n[server.tls]\ncert = \"" + (pki.dir.path / "none.pem").string() + "\"\nkey = \"" +
                              pki.key("server").string() + "\"\n");
