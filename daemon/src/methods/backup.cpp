@@ -172,7 +172,15 @@ void register_backup(MethodRegistrar& reg, Services& s) {
       throw Error(Errc::io_error, fmt::format("cannot read {}", file.string()), "backup");
     const bool eof = offset + n == size;
     if (eof) copies->remove(id);
-    return json{{"backup", id}, {"offset", offset}, {"bytes", n}, {"eof", eof}, {"data", base64_encode(bytes)}};
+    // Written as text, with room for the envelope (rpc::response_text): base64 needs no
+    // escaping, and a JSON tree of the piece cost a copy and a character-by-character dump
+    // of 1.4 MB per call. The id is one this goniod made (16 hex digits).
+    std::string out;
+    out.reserve(4 * n / 3 + 256);
+    out += fmt::format(R"({{"backup":"{}","offset":{},"bytes":{},"eof":{},"data":")", id, offset, n, eof);
+    out += base64_encode(bytes);
+    out += "\"}";
+    return rpc::Result(rpc::RawJson(std::move(out)));
   });
 }
 
