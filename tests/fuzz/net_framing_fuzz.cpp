@@ -32,7 +32,7 @@ struct Servers {
     limits.read_timeout = std::chrono::milliseconds(200);
     limits.max_in_flight = 4;
     ctx = std::make_unique<gonio::daemon::net::Context>(
-        gonio::daemon::net::Context{d.dispatcher, d.hub, *d.auth, limits, stats, nullptr, {}});
+        gonio::daemon::net::Context{d.dispatcher, d.hub, *d.auth, limits, stats, nullptr, {}, nullptr});
     unix_path = (d.dir / "fuzz.sock").string();
     ndjson = gonio::daemon::net::listen_unix(io, unix_path, *ctx);
     http = gonio::daemon::net::listen_http(io, "127.0.0.1", 0, *ctx);
