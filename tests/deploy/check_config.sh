@@ -51,7 +51,7 @@ bad 's/^baud = 115200$/baud = 7/' instrument.motion.links.bus.baud "allowed rang
 bad 's/^min_separation = 8 .*/min_separation = 200/' instrument.limits.min_separation "[0, 179]"
 bad 's/^z_threshold = 5.0$/z_treshold = 5.0/' divergence.z_treshold "unknown"
 bad 's/^incidence = \[0, 80\]$/incidence = [10, 80]/' instrument.limits.incidence "homing"
-bad 's/^driver = "scpi-serial".*/driver = "scpi-carrier-pigeon"/' instrument.photometer.driver "known:"
+bad 's/^driver = "scpi-serial".*/driver = "scpi-carrier-pigeon"/' instrument.photometer.driver "the drivers are"
 check "$tmp/none.toml"
 ((rc == 2)) && [[ $err == *"$tmp/none.toml"* ]] || fail "a missing file: status $rc, $err"
 "$goniod" --check-config "$conf" --state-dir "$tmp" >/dev/null 2>&1 && fail "--check-config with --state-dir is accepted"
