@@ -14,30 +14,6 @@
 namespace gonio::test {
 namespace {
 
-struct ToolRun {
-  int code = -1;
-  std::string out;
-};
-
-// Runs `exe` (a program of the build) with `args`; stdout and stderr together.
-ToolRun run_tool(const std::string& exe, const std::vector<std::string>& args) {
-  std::string cmd = std::string(GONIO_BIN_DIR) + "/" + exe;
-  for (const auto& a : args) {
-    cmd += " '";
-    for (char ch : a) cmd += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
-    cmd += "'";
-  }
-  cmd += " 2>&1";
-  ToolRun r;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  char buf[4096];
-  std::size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int status = ::pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
 // An SQLite file opened read-only, for the checks.
 class Db {
  public:
@@ -109,7 +85,7 @@ TEST(Backup, MidScanUnderLoadRestoresEveryAcknowledgedPointAndResumes) {
       });
     // Every point acknowledged (committed and served) before the backup begins.
     acked = c.call("scan.points", json{{"scan", id}, {"limit", 1000}})["points"];
-    const auto r = run_tool("gonioctl", {"--state-dir", live.string(), "--connect", g.uri("tcp://"), "--json",
+    const auto r = run_program("gonioctl", {"--state-dir", live.string(), "--connect", g.uri("tcp://"), "--json",
                                          "backup", copy.string()});
     done = true;
     for (auto& t : load) t.join();
@@ -137,7 +113,7 @@ TEST(Backup, MidScanUnderLoadRestoresEveryAcknowledgedPointAndResumes) {
     for (std::size_t i = 0; i < acked.size(); ++i) EXPECT_EQ(json::parse(stored[i]), acked[i]) << "point " << i;
   }
   const auto restored = dir.path / "restored";
-  const auto r = run_tool("goniod", {"--restore", copy.string(), "--state-dir", restored.string()});
+  const auto r = run_program("goniod", {"--restore", copy.string(), "--state-dir", restored.string()});
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("restored"), std::string::npos) << r.out;
   EXPECT_EQ(listing(restored), std::vector<std::string>{"goniod.db"});
@@ -164,7 +140,7 @@ TEST(Backup, RestoreRefusesWhatIsNotAnEmptyDirectoryOrNotAGonioStoreTouchingNoth
     auto c = g.unix_conn();
     const auto id = submit(c, "tile", kTrueSample, json{{"grids", {"in=45;out=-30:30:20"}}});
     ASSERT_EQ(wait_state(c, id, {"completed"})["state"], "completed");
-    const auto r = run_tool("gonioctl", {"--state-dir", (dir.path / "live").string(), "backup", copy.string()});
+    const auto r = run_program("gonioctl", {"--state-dir", (dir.path / "live").string(), "backup", copy.string()});
     ASSERT_EQ(r.code, 0) << r.out;
     EXPECT_NE(r.out.find("sha256"), std::string::npos) << r.out;
     // Only an admin may take one: a viewer's token is refused.
@@ -186,7 +162,7 @@ TEST(Backup, RestoreRefusesWhatIsNotAnEmptyDirectoryOrNotAGonioStoreTouchingNoth
       std::ofstream(nightly / fmt::format("goniod-2020-01-{:02}T023000Z.db", day)) << "old copy\n";
     std::ofstream(nightly / "goniod-2020-01-19T120000Z.db") << "old copy\n";
     std::ofstream(nightly / "README") << "not a copy\n";
-    const auto rr = run_tool("gonioctl", {"--state-dir", (dir.path / "live").string(), "backup", "--dir",
+    const auto rr = run_program("gonioctl", {"--state-dir", (dir.path / "live").string(), "backup", "--dir",
                                           nightly.string(), "--keep-daily", "3", "--keep-weekly", "3"});
     ASSERT_EQ(rr.code, 0) << rr.out;
     auto left = listing(nightly);
@@ -200,14 +176,14 @@ TEST(Backup, RestoreRefusesWhatIsNotAnEmptyDirectoryOrNotAGonioStoreTouchingNoth
     EXPECT_TRUE(left[4].starts_with("goniod-20") && left[4].ends_with("Z.db")) << left[4];
     EXPECT_EQ(Db(nightly / left[4]).one("PRAGMA integrity_check"), "ok");
     EXPECT_NE(rr.out.find("removed " + (nightly / "goniod-2020-01-19T023000Z.db").string()), std::string::npos) << rr.out;
-    EXPECT_EQ(run_tool("gonioctl", {"--state-dir", (dir.path / "live").string(), "backup"}).code, 2);
+    EXPECT_EQ(run_program("gonioctl", {"--state-dir", (dir.path / "live").string(), "backup"}).code, 2);
   }
 
   // A state directory that is not empty: named, and left as it was.
   const auto busy = dir.path / "busy";
   fs::create_directories(busy);
   std::ofstream(busy / "notes.txt") << "keep me\n";
-  auto r = run_tool("goniod", {"--restore", copy.string(), "--state-dir", busy.string()});
+  auto r = run_program("goniod", {"--restore", copy.string(), "--state-dir", busy.string()});
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find(busy.string() + " is not empty"), std::string::npos) << r.out;
   EXPECT_EQ(listing(busy), std::vector<std::string>{"notes.txt"});
@@ -215,7 +191,7 @@ TEST(Backup, RestoreRefusesWhatIsNotAnEmptyDirectoryOrNotAGonioStoreTouchingNoth
   // Files that are not a gonio store, each named with what is wrong; no state dir made.
   const auto target = dir.path / "target";
   const auto refuse = [&](const fs::path& file, const std::string& why) {
-    const auto rr = run_tool("goniod", {"--restore", file.string(), "--state-dir", target.string()});
+    const auto rr = run_program("goniod", {"--restore", file.string(), "--state-dir", target.string()});
     EXPECT_EQ(rr.code, 2) << rr.out;
     EXPECT_NE(rr.out.find(file.string()), std::string::npos) << rr.out;
     EXPECT_NE(rr.out.find(why), std::string::npos) << rr.out;
@@ -244,7 +220,7 @@ TEST(Backup, RestoreRefusesWhatIsNotAnEmptyDirectoryOrNotAGonioStoreTouchingNoth
   // The good copy into a directory that exists and is empty.
   const auto empty = dir.path / "empty";
   fs::create_directories(empty);
-  r = run_tool("goniod", {"--restore", copy.string(), "--state-dir", empty.string()});
+  r = run_program("goniod", {"--restore", copy.string(), "--state-dir", empty.string()});
   ASSERT_EQ(r.code, 0) << r.out;
   Db db(empty / "goniod.db");
   EXPECT_EQ(db.one("PRAGMA integrity_check"), "ok");

@@ -16,31 +16,7 @@
 namespace gonio::test {
 namespace {
 
-struct Run {
-  int code = -1;
-  std::string out;
-};
-
-// Runs a program of the build with `args`; stdout and stderr together.
-Run run(const std::string& program, const std::vector<std::string>& args) {
-  std::string cmd = std::string(GONIO_BIN_DIR) + "/" + program;
-  for (const auto& a : args) {
-    cmd += " '";
-    for (char ch : a) cmd += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
-    cmd += "'";
-  }
-  cmd += " 2>&1";
-  Run r;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  char buf[4096];
-  std::size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int status = ::pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-Run gonioctl(const std::vector<std::string>& args) { return run("gonioctl", args); }
+ProgramRun gonioctl(const std::vector<std::string>& args) { return run_program("gonioctl", args); }
 
 TEST(Gonioctl, CommandsTablesJsonAndExitCodes) {
   TempDir dir;
@@ -248,14 +224,14 @@ TEST(Gonioctl, GoniodConfigTyposAndMockReplacementAreSaid) {
   std::ofstream(hw) << "[instrument.motion]\ndriver = \"modbus\"\n\n[instrument.photometer]\n"
                        "driver = \"scpi-tcp\"\nhost = \"127.0.0.1\"\n";
   for (const bool mock : {true, false}) {
-    const auto r = run("goniod", mock ? std::vector<std::string>{"--mock", "--check-config", typo.string()}
+    const auto r = run_program("goniod", mock ? std::vector<std::string>{"--mock", "--check-config", typo.string()}
                                       : std::vector<std::string>{"--check-config", typo.string()});
     EXPECT_EQ(r.code, 2) << mock << r.out;
     EXPECT_NE(r.out.find("instrument.motion.driver: 'mokc' is not a driver (did you mean 'mock'?)"), std::string::npos)
         << mock << r.out;
     EXPECT_NE(r.out.find("modbus, mock, scpi-serial"), std::string::npos) << r.out;
   }
-  const auto r = run("goniod", {"--mock", "--check-config", hw.string()});
+  const auto r = run_program("goniod", {"--mock", "--check-config", hw.string()});
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("# warning: --mock replaces the configured instrument (motion driver 'modbus'"), std::string::npos)
       << r.out;
