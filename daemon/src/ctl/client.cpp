@@ -234,6 +234,22 @@ void Client::send_all(std::string_view data) {
 
 void Client::send_line(const std::string& line) { send_all(line + "\n"); }
 
+bool Client::receive_more(Clock::time_point deadline) {
+  // Bytes OpenSSL has already decrypted are not on the socket any more.
+  if (!tls_ || SSL_pending(tls_) == 0) {
+    pollfd p{fd_, POLLIN, 0};
+    int rc = 0;
+    while ((rc = ::poll(&p, 1, remaining_ms(deadline))) < 0 && errno == EINTR) {
+    }
+    if (rc < 0) throw ConnectionError(fmt::format("{}: poll: {}", uri_, std::strerror(errno)));
+    if (rc == 0) return false;
+  }
+  char buf[65536];
+  const auto n = receive(buf, sizeof buf);
+  buffer_.append(buf, static_cast<std::size_t>(n));
+  return true;
+}
+
 std::optional<std::string_view> Client::next_line(std::chrono::milliseconds timeout) {
   const auto deadline = Clock::now() + timeout;
   if (consumed_ == buffer_.size() || consumed_ > 65536) {  // the previous line's view ends here
@@ -247,17 +263,7 @@ std::optional<std::string_view> Client::next_line(std::chrono::milliseconds time
       return line;
     }
     searched = buffer_.size();
-    // Bytes OpenSSL has already decrypted are not on the socket any more.
-    if (!tls_ || SSL_pending(tls_) == 0) {
-      pollfd p{fd_, POLLIN, 0};
-      const int rc = ::poll(&p, 1, remaining_ms(deadline));
-      if (rc < 0 && errno == EINTR) continue;
-      if (rc < 0) throw ConnectionError(fmt::format("{}: poll: {}", uri_, std::strerror(errno)));
-      if (rc == 0) return std::nullopt;
-    }
-    char buf[65536];
-    const auto n = receive(buf, sizeof buf);
-    buffer_.append(buf, static_cast<std::size_t>(n));
+    if (!receive_more(deadline)) return std::nullopt;
   }
 }
 
@@ -279,16 +285,7 @@ std::optional<std::string_view> Client::next_body(std::chrono::milliseconds time
         return std::string_view(buffer_.data() + end + 4, length);
       }
     }
-    if (!tls_ || SSL_pending(tls_) == 0) {
-      pollfd p{fd_, POLLIN, 0};
-      const int rc = ::poll(&p, 1, remaining_ms(deadline));
-      if (rc < 0 && errno == EINTR) continue;
-      if (rc < 0) throw ConnectionError(fmt::format("{}: poll: {}", uri_, std::strerror(errno)));
-      if (rc == 0) return std::nullopt;
-    }
-    char buf[65536];
-    const auto n = receive(buf, sizeof buf);
-    buffer_.append(buf, static_cast<std::size_t>(n));
+    if (!receive_more(deadline)) return std::nullopt;
   }
 }
 

@@ -80,6 +80,9 @@ class Client {
   // Some bytes into `buf` (at most `size`) once poll said the socket is readable: > 0 read,
   // 0 nothing yet (TLS records that held no data), throws when the connection ended.
   long receive(char* buf, std::size_t size);
+  // Waits for the socket (unless OpenSSL holds decrypted bytes already) and appends what
+  // comes to the buffer; false when `deadline` passes first.
+  bool receive_more(std::chrono::steady_clock::time_point deadline);
   void close_connection() noexcept;
   std::int64_t send_request(const std::string& method, const nlohmann::json& params);
   // The answer to `id`: kept notifications and answers to something else are passed over;
