@@ -29,6 +29,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "gonio/test/command.hpp"
 #include "gonio/test/temp_dir.hpp"
 #include "gonio/twin/render.hpp"
 
@@ -37,22 +38,7 @@ namespace {
 namespace fs = std::filesystem;
 using namespace gonio::twin;
 
-struct Run {
-  int code = -1;
-  std::string out;
-};
-
-Run run(const std::string& cmd) {
-  Run r;
-  FILE* p = ::popen((cmd + " 2>&1").c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int status = ::pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+gonio::test::CommandRun run(const std::string& cmd) { return gonio::test::run_command(cmd + " 2>&1"); }
 
 constexpr int kSize = 64;
 constexpr double kLightTheta = 45, kLightPhi = 135, kEnvironment = 0.25;

@@ -16,6 +16,7 @@
 #include "gonio/proto/geometry.hpp"
 #include "gonio/proto/version.hpp"
 #include "gonio/twin/plot.hpp"
+#include "gonio/test/command.hpp"
 #include "gonio/test/temp_dir.hpp"
 
 namespace {
@@ -30,15 +31,9 @@ struct Run {
 // Runs gonio-twin with `args` (a shell-quoted string); stderr goes to a temp file.
 Run gonio_twin(const std::string& args) {
   const auto err_path = fs::temp_directory_path() / ("gonio-twin-err-" + std::to_string(::getpid()));
-  const std::string cmd = std::string(GONIO_BIN_DIR) + "/gonio-twin " + args + " 2>" + err_path.string();
-  Run r;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int status = ::pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const auto c = gonio::test::run_command(std::string(GONIO_BIN_DIR) + "/gonio-twin " + args + " 2>" +
+                                          err_path.string());
+  Run r{c.code, c.out, {}};
   std::ifstream e(err_path);
   r.err.assign(std::istreambuf_iterator<char>(e), {});
   fs::remove(err_path);

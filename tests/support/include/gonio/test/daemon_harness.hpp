@@ -31,6 +31,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "gonio/test/command.hpp"
+
 namespace gonio::test {
 
 namespace fs = std::filesystem;
@@ -97,10 +99,7 @@ inline int connect_tcp(const std::string& host, int port) {
 
 // "tcp://127.0.0.1:4321" → port
 // What a program of the build printed (stdout and stderr together) and its exit status.
-struct ProgramRun {
-  int code = -1;
-  std::string out;
-};
+using ProgramRun = CommandRun;
 
 // Runs `program` (a file of the build's bin directory) with `args`, each quoted for the shell.
 inline ProgramRun run_program(const std::string& program, const std::vector<std::string>& args) {
@@ -110,16 +109,7 @@ inline ProgramRun run_program(const std::string& program, const std::vector<std:
     for (char ch : a) cmd += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
     cmd += "'";
   }
-  cmd += " 2>&1";
-  ProgramRun r;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int status = ::pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return run_command(cmd + " 2>&1");
 }
 
 inline int port_of(const std::string& uri) { return std::stoi(uri.substr(uri.rfind(':') + 1)); }
