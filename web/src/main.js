@@ -93,9 +93,16 @@ function Dashboard({ token, onLogout, onRefused }) {
   const call = useCallback((m, p) => (rpc.current ? rpc.current.call(m, p) : made.current.promise.then((r) => r.call(m, p))), []);
   const notify = useCallback((msg) => { setToast(msg); setTimeout(() => setToast((t) => (t === msg ? null : t)), 6000); }, []);
 
+  // Answers may overtake each other (the poll and a scan.state's refresh): an older answer
+  // never replaces a newer one, or a resumed scan could show as paused again.
+  const queueAsked = useRef(0), queueShown = useRef(0);
   const refreshQueue = useCallback(async () => {
+    const asked = ++queueAsked.current;
     const q = await call('queue.status'); // waiting: queued, paused and interrupted scans, in order
-    setQueue(q);
+    if (asked > queueShown.current) {
+      queueShown.current = asked;
+      setQueue(q);
+    }
     return q;
   }, []);
 

@@ -84,9 +84,10 @@ function ScanRow({ scan, index, last, role, call, notify, onSelect, selected }) 
   };
   const actions = can(role, 'control') ? scanActions(scan.state) : [];
   const pct = scan.points_total ? Math.round((100 * scan.points_done) / scan.points_total) : 0;
-  // null without a reason, not '': from an empty text node Preact would take the actions'
-  // span (the next unkeyed span) for the reason, and drop the buttons (and the focus) in it.
-  const reason = scan.reason ? html`<span class="muted reason">${scan.reason}</span>` : null;
+  // The row's children are the same, and keyed, in every state: a reason that comes and goes
+  // would otherwise shift the unkeyed spans, and Preact could take the actions' span for the
+  // reason's and rebuild the buttons under the pointer (a lost click) or the focus.
+  const reason = html`<span key="reason" class="muted reason" hidden=${!scan.reason}>${scan.reason || ''}</span>`;
   // Pause and Resume take turns in one slot: the button, and the keyboard focus on it, stays
   // when the scan's state flips.
   const toggle = actions.includes('pause')
@@ -98,7 +99,7 @@ function ScanRow({ scan, index, last, role, call, notify, onSelect, selected }) 
     <progress max="100" value=${pct} aria-label="progress"></progress>
     <span class="muted">${scan.points_done}/${scan.points_total}${scan.points_diverged ? ` · ${scan.points_diverged} diverged` : ''}</span>
     ${reason}
-    <span class="actions">
+    <span key="actions" class="actions">
       ${toggle}
       ${actions.includes('reorder') && html`<button aria-label="earlier" data-testid="queue-up" disabled=${index === 0} onClick=${() => act('queue.reorder', { scan: scan.id, position: index - 1 })}>↑</button>
         <button aria-label="later" data-testid="queue-down" disabled=${last} onClick=${() => act('queue.reorder', { scan: scan.id, position: index + 1 })}>↓</button>`}

@@ -244,7 +244,14 @@ describe('dashboard', () => {
     const scan = (await g.call('scan.list', { state: 'paused' }))[0];
     assert.ok(scan && scan.points_done <= held + 1);
     await page.click(`${$('queue')} [data-state="paused"] ${$('scan-resume')}`);
-    await page.waitForSelector(`${$('queue')} [data-state="running"]`, { timeout: T });
+    // goniod took the click (the scan left paused), then the row shows it running; if not,
+    // the failure says what goniod and the row held.
+    await until('the scan is still paused after Resume', async () => (await g.call('scan.get', { scan: scan.id })).state !== 'paused');
+    await page.waitForSelector(`${$('queue')} [data-state="running"]`, { timeout: T }).catch(async (e) => {
+      const got = await g.call('scan.get', { scan: scan.id });
+      const row = await page.$eval($('queue'), (q) => q.outerHTML).catch(() => null);
+      throw new Error(`${e.message}; goniod: scan ${scan.id} ${got.state} (${got.reason}); the queue: ${row}`);
+    });
     await waitPoints(held + 2);
   });
 
