@@ -249,7 +249,7 @@ def main():
 
     def report(number, why):
         block, command = lines[number]
-        print(f"FAIL {a.doc}:{number}: {why}\n  $ {command}")
+        print(f"FAIL {a.doc}:{number} (the block at line {block.line}): {why}\n  $ {command}")
         for l in output.get(number, [])[-60:]:
             print(f"  | {l}")
 
