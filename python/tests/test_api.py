@@ -98,7 +98,7 @@ def test_urls():
 
 
 def test_the_progress_bar_is_gonioctls():
-    # tests/unit/daemon/ctl_format_test.cpp, the same figures
+    # tests/unit/daemon/ctl/format_test.cpp, the same figures
     assert gonio.bar_text(5, 10, 65, 2, 10) == "[#####·····]  5/10   50 %  ETA 1:05  diverged 2"
     assert gonio.bar_text(10, 10, 3, 0, 4) == "[####] 10/10  100 %  ETA 0:00  diverged 0"
     assert gonio.bar_text(0, 0, 0, 0, 2) == "[··] 0/0    0 %  ETA 0:00  diverged 0"

@@ -436,7 +436,7 @@ std::vector<float> golden_render() {
 TEST(Render, MatchesTheGoldenImage) {
   SKIP_UNLESS_OPTIMISED();
   const std::filesystem::path path =
-      std::filesystem::path(GONIO_SOURCE_DIR) / "tests/unit/twin/plot/data/render_golden_40.f32";
+      std::filesystem::path(GONIO_SOURCE_DIR) / "tests/unit/twin/render/data/render_golden_40.f32";
   const auto got = golden_render();
   if (std::getenv("GONIO_UPDATE_GOLDEN") != nullptr) {
     std::ofstream f(path, std::ios::binary);
