@@ -5,7 +5,8 @@
 
 The ```sh, ```bash and ```shell blocks of DOC (and the `$ ` lines of ```console blocks) run
 in order, one command at a time, in one bash in a fresh temporary directory, with --bin
-first on PATH. A command that exits non-zero fails the test, naming the document, the line
+first on PATH; a ```python block runs as one program among them, by the runner's own
+interpreter (Debian's, as the Python client's tests; python/ on PYTHONPATH). A command that exits non-zero fails the test, naming the document, the line
 and the command's output. What is substituted in every block:
 
 - `build/release/bin` is --bin (the tree under test); `/tmp/gonio` is a directory in the
@@ -42,7 +43,7 @@ import sys
 import tempfile
 import time
 
-SHELL_INFO = {"sh", "bash", "shell", "console"}
+SHELL_INFO = {"sh", "bash", "shell", "console", "python"}
 ANNOTATION = re.compile(r"^<!--\s*doc-test:\s*(.*?)\s*-->\s*$")
 OTHER_COMMENT = re.compile(r"^<!--.*-->\s*$")
 MARK = "\x1edoc-test"
@@ -61,7 +62,10 @@ class Block:
         """(line, command) per logical command: comments and blank lines dropped, `\\`
         continuations joined; in a console block only `$ ` lines and their continuations."""
         out, current, start = [], None, 0
-        for number, text in self.lines:
+        if self.info == "python" and self.lines:
+            body = "\n".join(text for _, text in self.lines)
+            out = [(self.lines[0][0], f"{sys.executable} - <<'__DOC_PYTHON__'\n{body}\n__DOC_PYTHON__")]
+        for number, text in self.lines if self.info != "python" else []:
             if self.info == "console":
                 if current is None:
                     if not text.startswith("$ "):
@@ -195,7 +199,7 @@ def main():
             lines[number] = (b, command)
 
     with tempfile.TemporaryDirectory(prefix="gonio-doc-") as work:
-        env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}",
+        env = dict(os.environ, PATH=f"{bin_dir}:{os.environ['PATH']}", PYTHONPATH=str(root / "python"),
                    HOME=work, GONIO_SOURCE_DIR=str(root))
         env.pop("GONIO_STATE_DIR", None)
         script = script_for(blocks, work, bin_dir, f"{work}/goniod-mock")

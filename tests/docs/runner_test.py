@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """The docs runner itself: a broken example fails naming the document, the line and the
 output; a block that should fail and does not, fails; skips are counted with their reason;
-a substitution whose text is not in its block is an error. No goniod: plain shell blocks."""
+a substitution whose text is not in its block is an error; a Python block is one program.
+No goniod: plain shell blocks."""
 import pathlib
 import subprocess
 import sys
@@ -43,9 +44,10 @@ check("replace", f'<!-- doc-test: replace "1 = 2" "2 = 2" -->\n{F}sh\ntest 1 = 2
 check("replace of absent text", f'<!-- doc-test: replace "nowhere" "x" -->\n{F}sh\ntrue\n{F}\n', 1,
       "'nowhere' is not in the block")
 check("console block", f"{F}console\n$ echo hi\nhi\n$ false\n{F}\n", 1, "FAIL doc.md:4")
-check("other languages are not run", f"{F}python\nraise SystemExit(1)\n{F}\n{F}\nfalse\n{F}\n", 0,
-      "0 blocks")
+check("other languages are not run", f"{F}toml\nfalse\n{F}\n{F}\nfalse\n{F}\n", 0, "0 blocks")
+check("a python block is one program", f"{F}python\nimport sys\nprint('py ok')\nsys.exit(3)\n{F}\n", 1,
+      "FAIL doc.md:2", "exited 3", "py ok")
 for f in failures:
     print(f)
-print(f"{9 - len(failures)} of 9 runner checks passed")
+print(f"{10 - len(failures)} of 10 runner checks passed")
 sys.exit(1 if failures else 0)
