@@ -4,7 +4,8 @@
 // points in the order the twin chose them, the latest marked.
 import { useEffect, useRef } from 'preact/hooks';
 import { html } from './ui.js';
-import { adaptiveState, adaptiveWarnings, chosenOrder, fmt, parameterLines } from './logic.js';
+import { adaptiveState, adaptiveWarnings, chosenOrder, parameterLines } from './logic/adaptive.js';
+import { fmt } from './logic/format.js';
 import { adaptivePlot, adaptiveData } from './plot.js';
 
 const SHOWN_PICKS = 300; // the most recent choices listed; the plot marks them all

@@ -2,7 +2,9 @@
 // under one heading that opens the scan); technicians acknowledge them. The ones goniod
 // resolved (the scan's final verdict no longer supports them) are listed apart, below.
 import { html } from './ui.js';
-import { can, groupAlerts, shortTime, splitAlerts } from './logic.js';
+import { groupAlerts, splitAlerts } from './logic/alerts.js';
+import { shortTime } from './logic/format.js';
+import { can } from './logic/roles.js';
 
 function AlertItem({ a, role, ack }) {
   return html`<li class=${`alert sev-${a.severity}${a.acknowledged ? ' acked' : ''}`} data-testid=${`alert-${a.id}`} data-kind=${a.kind} data-acknowledged=${String(a.acknowledged)}>

@@ -3,7 +3,9 @@
 // against each other — and each one's difference to the first.
 import { useEffect, useState } from 'preact/hooks';
 import { html, PlotHost } from './ui.js';
-import { POINTS_PAGE, MAX_COMPARE, channelOf, compareColumns, diffStats, fmt, incidences, shortTime } from './logic.js';
+import { MAX_COMPARE, compareColumns, diffStats } from './logic/compare.js';
+import { fmt, shortTime } from './logic/format.js';
+import { POINTS_PAGE, channelOf, incidences } from './logic/points.js';
 import { overlayPlot, SERIES_COLORS } from './plot.js';
 
 async function allPoints(call, scan) {

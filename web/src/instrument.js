@@ -1,7 +1,9 @@
 // The instrument panel: state, fault latch, the goniometer diagram, drivers and links, Stop.
 import { useState } from 'preact/hooks';
 import { html } from './ui.js';
-import { armEnd, collisionWedge, can, fmt } from './logic.js';
+import { armEnd, collisionWedge } from './logic/diagram.js';
+import { fmt } from './logic/format.js';
+import { can } from './logic/roles.js';
 
 export function Goniometer({ thetaI, thetaR, sep }) {
   const cx = 130, cy = 120, r = 100;

@@ -7,17 +7,20 @@ import 'uplot/dist/uPlot.min.css';
 import './style.css';
 import { html } from './ui.js';
 import { Rpc, wsUrl } from './rpc.js';
-import { mergeAlerts, unacknowledged, can, coalesce, parseRoute, routeHash } from './logic.js';
+import { mergeAlerts, unacknowledged } from './logic/alerts.js';
+import { can } from './logic/roles.js';
+import { parseRoute, routeHash } from './logic/routes.js';
+import { coalesce } from './logic/timing.js';
 import { InstrumentPanel } from './instrument.js';
 import { QueuePanel, SubmitForm } from './queue.js';
-import { ScanPanel } from './scan.js';
+import { ScanPanel } from './scanplot.js';
 import { AlertsPanel } from './alerts.js';
 import { SamplesPanel } from './samples.js';
 import { TwinPanel } from './twin.js';
-import { ScansPanel } from './history.js';
-import { ScanView } from './scanview.js';
+import { ScansPanel } from './scans.js';
+import { ScanView } from './scanpage.js';
 import { ComparePanel } from './compare.js';
-import { SampleView } from './sampleview.js';
+import { SampleView } from './samplepage.js';
 
 const TOKEN_KEY = 'gonio.token';
 

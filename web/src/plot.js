@@ -1,7 +1,7 @@
 // uPlot wrappers: β against θr with error bars (drawn in a hook: uPlot has none), the
 // divergence lane with its thresholds, and spectra against λ.
 import uPlot from 'uplot';
-import { logRange, spacedLabels } from './logic.js';
+import { logRange, spacedLabels } from './logic/axes.js';
 
 const css = (name, fallback) => getComputedStyle(document.documentElement).getPropertyValue(name).trim() || fallback;
 

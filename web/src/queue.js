@@ -2,7 +2,9 @@
 // and the submit form, whose API errors are shown at the field they name.
 import { useState } from 'preact/hooks';
 import { html, Field, setter } from './ui.js';
-import { can, describeError, scanActions, submitFieldOf, submitParams } from './logic.js';
+import { describeError } from './logic/format.js';
+import { can, scanActions } from './logic/roles.js';
+import { submitFieldOf, submitParams } from './logic/submit.js';
 
 const FIELDS = ['sample', 'name', 'grids', 'geometries', 'wavelengths', 'repeats', 'reference', 'priority',
   'adaptive', 'model', 'target_rel_u', 'tolerance', 'max_points'];

@@ -1,7 +1,7 @@
 // One WebSocket per tab for JSON-RPC calls and the `subscribe` notifications. It logs in with
 // the bearer token as its first call (a browser cannot set headers on a WebSocket), subscribes
 // again after every reconnect, and reconnects with back-off (logic.js backoffDelay).
-import { backoffDelay } from './logic.js';
+import { backoffDelay } from './logic/timing.js';
 
 export class RpcError extends Error {
   constructor(error) {

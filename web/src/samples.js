@@ -1,7 +1,8 @@
 // The sample catalog; technicians create samples and see the twin's predicted curve first.
 import { useState } from 'preact/hooks';
 import { html, Field, setter, fieldErrors, PlotHost } from './ui.js';
-import { can, fmt } from './logic.js';
+import { fmt } from './logic/format.js';
+import { can } from './logic/roles.js';
 import { predictionColumns, predictionPlot } from './plot.js';
 
 const PREVIEW_GRID = 'in=45;out=-80:80:4';

@@ -1,7 +1,8 @@
 // The twin playground: a BSDF spec, a geometry grid and wavelengths → β with its s.e.
 import { useState } from 'preact/hooks';
 import { html, Field, setter, fieldErrors, PlotHost } from './ui.js';
-import { channelOf, fmt } from './logic.js';
+import { fmt } from './logic/format.js';
+import { channelOf } from './logic/points.js';
 import { predictionColumns, predictionPlot } from './plot.js';
 
 export function TwinPanel({ call }) {

@@ -2,7 +2,7 @@
 import { h } from 'preact';
 import { useEffect, useRef } from 'preact/hooks';
 import htm from 'htm';
-import { describeError } from './logic.js';
+import { describeError } from './logic/format.js';
 
 export const html = htm.bind(h);
 

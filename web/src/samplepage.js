@@ -1,7 +1,7 @@
 // One sample (#/sample/ID): its catalog entry and its scans, newest first.
 import { html } from './ui.js';
-import { fmt, shortTime } from './logic.js';
-import { ScansPanel } from './history.js';
+import { fmt, shortTime } from './logic/format.js';
+import { ScansPanel } from './scans.js';
 
 export function SampleView({ sampleId, samples, call, navigate, reloads }) {
   const s = samples.find((x) => x.id === sampleId);

@@ -3,8 +3,13 @@
 // (scan.fit), for an admin the instrument's calibration (instrument.calibrate, dry run first).
 import { useCallback, useEffect, useMemo, useRef, useState } from 'preact/hooks';
 import { html, download } from './ui.js';
-import { can, channelOf, checkFitModel, modelFromSpec, describeError, finished, fitRows, fmt, materialSummary, shortTime, verdictBadge } from './logic.js';
-import { ScanPanel } from './scan.js';
+import { checkFitModel, modelFromSpec, fitRows, materialSummary } from './logic/fit.js';
+import { describeError, fmt, shortTime } from './logic/format.js';
+import { finished } from './logic/scans.js';
+import { channelOf } from './logic/points.js';
+import { can } from './logic/roles.js';
+import { verdictBadge } from './logic/verdict.js';
+import { ScanPanel } from './scanplot.js';
 
 const CAL_PARAMS = ['incidence_offset_deg', 'receive_offset_deg', 'sample_tilt_deg', 'source_aperture_scale', 'receiver_aperture_scale', 'gain'];
 

@@ -1,42 +1,10 @@
-// Adaptive scans' pure logic: the submit form's adaptive plan and its error fields, the
-// loop's status as it went (the uncertainty plot), its state and warnings, and the points in
-// the order chosen along the β plot.
+// src/logic/adaptive.js: the uncertainty track, the loop's state and warnings, and the points in the order chosen.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import {
-  adaptiveParams, submitParams, submitFieldOf, describeError, relativeU, AdaptiveTrack, logRange, adaptiveState,
-  adaptiveWarnings, parameterLines, chosenOrder, candidateMarks, spacedLabels,
-} from '../../src/logic.js';
+import { AdaptiveTrack, adaptiveState, adaptiveWarnings, candidateMarks, chosenOrder, parameterLines, relativeU } from '../../../src/logic/adaptive.js';
 
-const status = (n, params, extra = {}) => ({ mode: 'parameters', state: 'running', points_used: n, parameters: params, chi2_per_dof: 1.1, misfit: false, warnings: [], ...extra });
 const point = (index, gi, thetaR, thetaI = 45) => ({ index, geometry_index: gi, planned: { theta_i: thetaI, theta_r: thetaR } });
-
-test('the form submits an adaptive plan in either mode, its values as typed', () => {
-  const base = { sample: '2', grids: 'in=45;out=15:75:1', wavelengths: '450,550,650', repeats: '1', reference: 'every_point' };
-  assert.equal(submitParams({ ...base, adaptive: 'off', model: 'x' }).adaptive, undefined);
-  assert.equal(submitParams(base).adaptive, undefined);
-  assert.deepEqual(submitParams({ ...base, adaptive: 'parameters', model: ' conductor:alpha=?,eta=0.2,k=3.9 ', target_rel_u: '0.01', tolerance: '0.5', max_points: '40' }).adaptive,
-    { mode: 'parameters', model: 'conductor:alpha=?,eta=0.2,k=3.9', target_rel_u: 0.01, max_points: 40 });
-  assert.deepEqual(adaptiveParams({ adaptive: 'curve', model: 'ignored', tolerance: '2e-2', target_rel_u: '0.1', max_points: '101' }),
-    { mode: 'curve', tolerance: 0.02, max_points: 101 });
-  // What is not a number goes as typed, for goniod to name.
-  assert.deepEqual(adaptiveParams({ adaptive: 'parameters', model: '', target_rel_u: 'one percent', max_points: '' }),
-    { mode: 'parameters', model: '', target_rel_u: 'one percent', max_points: '' });
-});
-
-test('an adaptive plan\'s error is shown at its own field', () => {
-  assert.equal(submitFieldOf('adaptive.model'), 'model');
-  assert.equal(submitFieldOf('adaptive.target_rel_u'), 'target_rel_u');
-  assert.equal(submitFieldOf('adaptive.tolerance'), 'tolerance');
-  assert.equal(submitFieldOf('adaptive.max_points'), 'max_points');
-  assert.equal(submitFieldOf('adaptive.mode'), 'adaptive');
-  assert.equal(submitFieldOf('adaptive'), 'adaptive');
-  assert.equal(submitFieldOf('adaptive.something_else'), 'adaptive');
-  assert.equal(submitFieldOf('grids[0].grid.out'), 'grids');
-  assert.equal(submitFieldOf(''), null);
-  const d = describeError({ code: -32602, message: 'adaptive.max_points: 500 is out of range [1, 183]', data: { field: 'adaptive.max_points' } });
-  assert.equal(submitFieldOf(d.path), 'max_points');
-});
+const status = (n, params, extra = {}) => ({ mode: 'parameters', state: 'running', points_used: n, parameters: params, chi2_per_dof: 1.1, misfit: false, warnings: [], ...extra });
 
 test('relative u: u/|value|, none where it cannot go on a log axis', () => {
   assert.equal(relativeU({ value: -0.5, u: 0.01 }), 0.02);
@@ -82,14 +50,6 @@ test('curve mode tracks the estimated error', () => {
   t.add({ mode: 'curve', state: 'running', points_used: 6, estimated_error: 0.2, warnings: [] });
   t.add({ mode: 'curve', state: 'target_reached', points_used: 9, estimated_error: 0.015, warnings: [] });
   assert.deepEqual(t.columns(), { x: [5, 6, 9], ys: [[null, 0.2, 0.015]], labels: ['estimated error'] });
-});
-
-test('a log range spans whole decades around the values and the target', () => {
-  assert.deepEqual(logRange([0.2, 0.05, null], 0.01), [0.01, 1]);
-  assert.deepEqual(logRange([0.003, 0.02], 0.01), [0.001, 0.1]);
-  assert.deepEqual(logRange([0.01], 0.01), [0.01, 0.1]); // one decade at least
-  assert.deepEqual(logRange([], null), [1e-3, 1]);
-  assert.deepEqual(logRange([0, -1, NaN], 0.05), [0.01, 0.1]);
 });
 
 test('the state says why the loop stopped, or that its scan did', () => {
@@ -150,10 +110,4 @@ test('the β plot marks every candidate and each measured one once, at the plott
   assert.deepEqual(all.ticks, [15, 30, 45, 60]); // θr once, whatever the incidence
   assert.equal(all.chosen.length, 3);
   assert.deepEqual(candidateMarks(null, [], 45), { ticks: [], chosen: [] });
-});
-
-test('labels along an axis are kept in priority order where there is room', () => {
-  const kept = spacedLabels([{ x: 100, id: 'latest' }, { x: 10 }, { x: 20 }, { x: 30 }, { x: 95 }, { x: 120 }], 16);
-  assert.deepEqual(kept.map((k) => k.x), [100, 10, 30, 120]);
-  assert.deepEqual(spacedLabels([], 16), []);
 });

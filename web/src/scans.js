@@ -3,7 +3,9 @@
 // so a filtered list is a link too. Rows open the scan view; ticked rows are compared.
 import { useEffect, useState } from 'preact/hooks';
 import { html } from './ui.js';
-import { HISTORY_PAGE, SCAN_STATES, MAX_COMPARE, describeError, historyField, historyQuery, shortTime, toggleCompare } from './logic.js';
+import { MAX_COMPARE, toggleCompare } from './logic/compare.js';
+import { describeError, shortTime } from './logic/format.js';
+import { HISTORY_PAGE, SCAN_STATES, historyField, historyQuery } from './logic/scans.js';
 
 const FILTERS = ['sample', 'state', 'from', 'to', 'text'];
 

@@ -3,7 +3,11 @@
 // clicked point's spectra and colours, and the exports.
 import { useEffect, useMemo, useRef, useState } from 'preact/hooks';
 import { html, download } from './ui.js';
-import { POINTS_PAGE, AdaptiveTrack, Curve, budgetRows, candidateMarks, channelOf, coalesce, exportFile, fmt, incidences, verdictBadge } from './logic.js';
+import { AdaptiveTrack, candidateMarks } from './logic/adaptive.js';
+import { fmt } from './logic/format.js';
+import { POINTS_PAGE, Curve, channelOf, exportFile, incidences } from './logic/points.js';
+import { coalesce } from './logic/timing.js';
+import { budgetRows, verdictBadge } from './logic/verdict.js';
 import { betaPlot, betaData, lanePlot, laneData, spectrumPlot } from './plot.js';
 import { colorOf } from './color.js';
 import { AdaptivePanel } from './adaptive.js';
