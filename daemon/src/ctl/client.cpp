@@ -232,8 +232,6 @@ void Client::send_all(std::string_view data) {
   }
 }
 
-void Client::send_line(const std::string& line) { send_all(line + "\n"); }
-
 bool Client::receive_more(Clock::time_point deadline) {
   // Bytes OpenSSL has already decrypted are not on the socket any more.
   if (!tls_ || SSL_pending(tls_) == 0) {
@@ -287,12 +285,6 @@ std::optional<std::string_view> Client::next_body(std::chrono::milliseconds time
     }
     if (!receive_more(deadline)) return std::nullopt;
   }
-}
-
-std::optional<std::string> Client::read_line(std::chrono::milliseconds timeout) {
-  const auto line = next_line(timeout);
-  if (!line) return std::nullopt;
-  return std::string(*line);
 }
 
 std::int64_t Client::send_request(const std::string& method, const json& params) {

@@ -87,11 +87,6 @@ void ModbusLink::close() {
   disconnect_locked();
 }
 
-std::uint64_t ModbusLink::transactions() const {
-  std::lock_guard lock(mutex_);
-  return transactions_;
-}
-
 std::uint64_t ModbusLink::connects() const {
   std::lock_guard lock(mutex_);
   return connects_;
@@ -178,10 +173,7 @@ void ModbusLink::transact(int unit, const char* what, std::uint16_t address,
     modbus_set_slave(ctx_, unit);
     if (before_send) before_send();
     errno = 0;
-    if (op(ctx_) >= 0) {
-      ++transactions_;
-      return;
-    }
+    if (op(ctx_) >= 0) return;
     const int err = errno;
     const Failure f = classify(err);
     const std::string why = modbus_strerror(err);

@@ -98,8 +98,6 @@ RegisterMap RegisterMap::preset(std::string_view name) {
               fmt::format("unknown register map preset '{}' (known: az)", name), "preset");
 }
 
-std::vector<std::string> RegisterMap::preset_names() { return {"az"}; }
-
 std::uint16_t parse_register_address(const nlohmann::json& j, const std::string& field) {
   long long v = 0;
   if (j.is_number_integer()) {

@@ -9,52 +9,6 @@
 
 namespace gonio::twin {
 
-AngularGrid measurement_grid(double theta_step_deg, double phi_step_deg, double max_theta_deg) {
-  if (!(theta_step_deg >= 0.1 && theta_step_deg <= 45))
-    throw Error::out_of_range("theta_step", theta_step_deg, 0.1, 45, "°");
-  if (!(phi_step_deg >= 1 && phi_step_deg <= 90))
-    throw Error::out_of_range("phi_step", phi_step_deg, 1, 90, "°");
-  if (!(max_theta_deg >= 1 && max_theta_deg <= 89))
-    throw Error::out_of_range("max_theta", max_theta_deg, 1, 89, "°");
-  AngularGrid g;
-  g.bilateral = true;
-  for (double t = 0; t <= max_theta_deg + 1e-9; t += theta_step_deg) {
-    g.theta_i.push_back(std::round(t * 1e6) / 1e6);
-    g.theta_o.push_back(std::round(t * 1e6) / 1e6);
-  }
-  for (double p = 0; p <= 180 + 1e-9; p += phi_step_deg) g.phi_o.push_back(std::round(p * 1e6) / 1e6);
-  if (g.phi_o.back() < 180) g.phi_o.push_back(180);
-  return g;
-}
-
-Geometry node_geometry(double theta_i, double theta_o, double phi_o_relative) {
-  // wi = (−sin θi, 0, cos θi) sits at azimuth 180°; the table's φo is relative to it.
-  double phi_r = 180 + phi_o_relative;
-  while (phi_r > 180) phi_r -= 360;
-  return Geometry{theta_i, 0, theta_o, phi_r};
-}
-
-std::shared_ptr<TabulatedBsdf> measure_tabulated(const Twin& twin, const AngularGrid& grid,
-                                                 const EstimatorOptions& options,
-                                                 unsigned threads) {
-  if (!grid.phi_i.empty()) throw Error::invalid("grid.phi_i", "must be empty (isotropic)");
-  std::vector<Geometry> nodes;
-  nodes.reserve(grid.theta_i.size() * grid.theta_o.size() * grid.phi_o.size());
-  // Layout of BsdfTable: channel fastest, then θi (p0), φi (p1, one node), θo (p2), φo (p3).
-  for (double po : grid.phi_o)
-    for (double to : grid.theta_o)
-      for (double ti : grid.theta_i) nodes.push_back(node_geometry(ti, to, po));
-  const auto pred = twin.predict_many(nodes, options, threads);
-  const std::size_t C = twin.wavelengths().size();
-  std::vector<double> values(nodes.size() * C);
-  for (std::size_t k = 0; k < nodes.size(); ++k)
-    for (std::size_t c = 0; c < C; ++c)
-      values[k * C + c] = std::max(0.0, pred[k].beta[c]) * kInvPi;
-  return std::make_shared<TabulatedBsdf>(twin.wavelengths(), grid, twin.wavelengths().values(),
-                                         std::move(values), std::vector<double>{},
-                                         "virtually measured " + twin.sample().spec());
-}
-
 SpecularGrid specular_measurement_grid(double theta_step_deg, double radial_step_deg,
                                        double phi_step_deg) {
   if (!(theta_step_deg >= 0.5 && theta_step_deg <= 45))

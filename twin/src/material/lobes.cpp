@@ -32,13 +32,6 @@ std::vector<std::pair<double, double>> Lobe::pairs(std::string_view key) const {
   return {};
 }
 
-bool Lobe::is_constant(std::string_view key) const {
-  const auto p = pairs(key);
-  for (const auto& [nm, x] : p)
-    if (x != p.front().second) return false;
-  return true;
-}
-
 std::vector<Lobe> canonical_lobes(std::string_view spec, const WavelengthGrid& grid) {
   const auto model = make_bsdf(spec, grid);
   std::vector<Lobe> out;

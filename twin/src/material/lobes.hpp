@@ -20,7 +20,6 @@ struct Lobe {
   const bsdf::RawValue& raw(std::string_view key) const;
   double number(std::string_view key) const;
   std::vector<std::pair<double, double>> pairs(std::string_view key) const;
-  bool is_constant(std::string_view key) const;
 };
 
 // Builds `spec` on `grid` and returns its canonical lobes.

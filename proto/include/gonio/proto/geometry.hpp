@@ -38,7 +38,6 @@ struct Geometry {
 
   bool in_measurement_plane() const noexcept { return phi_i == 0 && phi_r == 0; }
   bool is_transmission() const noexcept;
-  bool is_reflection() const noexcept { return !is_transmission(); }
   // θi − θr; meaningful for in-plane reflection geometries.
   double aspecular() const noexcept { return theta_i - theta_r; }
   std::array<double, 3> incident_direction() const noexcept;

@@ -213,9 +213,6 @@ class CurveDesign final : public Design {
                                   const Geometry& arms) const override;
   bool target_reached() const override;
   DesignStatus status() const override;
-  // Per candidate: the estimated relative error of the interpolated curve (0 where
-  // measured), from the last update.
-  const std::vector<double>& estimated_errors() const noexcept { return error_; }
   // The interpolated curve at candidate c, per channel: the local cubic (in log β where
   // positive) through its measured neighbours along its curve; the measurement itself where
   // measured. Empty when c has no measured point on either side.

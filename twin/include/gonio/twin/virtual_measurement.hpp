@@ -1,33 +1,20 @@
-// Virtual measurement of a whole BSDF: the twin's predicted β on an angular grid, turned
+// Virtual measurement of a whole BSDF: the twin's predicted β on a specular grid, turned
 // into a tabulated BSDF (f = β/π per node) — what the instrument would deliver to a
 // renderer. Used by `gonio-twin render` (the measured sphere) and `convert --virtual`.
 //
-// Two grids. The spherical one (θi, θo, φo in fixed steps) is what a plain scan plan gives,
-// but multilinear interpolation of a glossy lobe on it spreads the peak over whole cells
+// The grid is specular (θi, angle from the specular direction, azimuth about it): it keeps a
+// glossy lobe at radial 0 for every θi, so interpolation does not invent energy, where a
+// spherical grid (θi, θo, φo in fixed steps) spreads the peak over whole cells
 // (twin/rendering.md: a conductor with α = 0.05 on 2.5°/15° reflects 10× too much at
-// θo = 85°). The specular grid (θi, angle from the specular direction, azimuth about it)
-// keeps the lobe at radial 0 for every θi, so interpolation does not invent energy.
+// θo = 85°).
 #pragma once
 
-#include <memory>
+#include <vector>
 
 #include "gonio/twin/tabulated.hpp"
 #include "gonio/twin/twin.hpp"
 
 namespace gonio::twin {
-
-// An isotropic, bilateral measurement grid: θi, θo in [0, 90), φo relative to the plane of
-// incidence in [0, 180] (180 = forward, the specular side).
-AngularGrid measurement_grid(double theta_step_deg, double phi_step_deg,
-                             double max_theta_deg = 85);
-
-// Geometry of a grid node in the docs/architecture.md §2 frame (wi at φi = 0).
-Geometry node_geometry(double theta_i, double theta_o, double phi_o_relative);
-
-// Predicts every node (reflection only) and tabulates f = β/π on the twin's wavelengths.
-std::shared_ptr<TabulatedBsdf> measure_tabulated(const Twin& twin, const AngularGrid& grid,
-                                                 const EstimatorOptions& options,
-                                                 unsigned threads = 0);
 
 // A specular grid that does not depend on the BSDF: θi every `theta_step_deg` from 0 to 85°,
 // radial angles from 0 in steps that start at `radial_step_deg` and grow by 10 % per node up

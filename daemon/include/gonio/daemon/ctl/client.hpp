@@ -70,10 +70,6 @@ class Client {
   // The next notification (buffered or read), nullopt after `timeout` without one.
   std::optional<nlohmann::json> next_notification(std::chrono::milliseconds timeout);
 
-  // Raw access for tools: one line out, one line in.
-  void send_line(const std::string& line);
-  std::optional<std::string> read_line(std::chrono::milliseconds timeout);
-
  private:
   void send_all(std::string_view data);
   void start_tls(const std::string& ca);

@@ -76,9 +76,7 @@ class ModbusLink {
 
   // Drops the connection (the next transaction re-opens it).
   void close();
-  // Requests that got an answer, successful connections and all connection attempts,
-  // for logs and tests.
-  std::uint64_t transactions() const;
+  // Successful connections and all connection attempts, for logs and tests.
   std::uint64_t connects() const;
   std::uint64_t connect_attempts() const;
 
@@ -97,7 +95,6 @@ class ModbusLink {
   Clock::time_point next_attempt_{};
   std::chrono::milliseconds backoff_{};
   std::string last_connect_error_;
-  std::uint64_t transactions_ = 0;
   std::uint64_t connects_ = 0;
   std::uint64_t attempts_ = 0;
 };

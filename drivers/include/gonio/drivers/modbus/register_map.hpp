@@ -72,7 +72,6 @@ struct RegisterMap {
 
   // Throws Error(not_found) listing the known presets.
   static RegisterMap preset(std::string_view name);
-  static std::vector<std::string> preset_names();
   // Strict reading; `context` prefixes every error field ("axes.receive.register_map").
   static RegisterMap from_json(const nlohmann::json& j, const std::string& context);
   nlohmann::json to_json() const;

@@ -89,7 +89,6 @@ class Session {
 
   // The caller found a reply that breaks the protocol: resynchronise before the next exchange.
   void mark_out_of_step() noexcept { out_of_step_ = true; }
-  bool out_of_step() const noexcept { return out_of_step_; }
   // Resynchronises now (see above); a no-op when in step.
   void resync(Deadline deadline);
 

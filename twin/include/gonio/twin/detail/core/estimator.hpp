@@ -79,7 +79,6 @@ class FluxEstimator {
                              channels_ + c] / static_cast<double>(n_);
   }
   std::size_t variants() const noexcept { return variants_.size(); }
-  bool has_reference() const noexcept { return reference_ != nullptr; }
   Diagnostics diagnostics() const;
 
  private:
