@@ -11,13 +11,6 @@ import argparse
 import pathlib
 import re
 
-ap = argparse.ArgumentParser()
-ap.add_argument("root", nargs="?", default=".")
-ap.add_argument("--top", type=int, default=15)
-ap.add_argument("--min", type=int, default=0)
-args = ap.parse_args()
-root = pathlib.Path(args.root)
-
 
 def blank(s):
     """Comments, strings and characters replaced by spaces; newlines kept."""
@@ -47,17 +40,30 @@ def blank(s):
 
 
 control = re.compile(r"\b(if|for|while|switch|catch|do|else|try)\b")
-found = []
-for path in sorted(root.glob("*/**/*.[ch]pp")):
-    if {"build", "node_modules", ".git"} & set(path.parts):
-        continue
+
+
+def sources(root):
+    """The C++ files under root, build trees and dependencies left out."""
+    for path in sorted(root.glob("*/**/*.[ch]pp")):
+        if not {"build", "node_modules", ".git"} & set(path.relative_to(root).parts):
+            yield path
+
+
+def functions(root):
+    """(lines, "path:line", name) of every function in the C++ files under root."""
+    found = []
+    for path in sources(root):
+        found += functions_in(path, root)
+    return found
+
+
+def functions_in(path, root):
+    found = []
     s = blank(path.read_text(errors="replace"))
     stack = []  # kinds of the open braces: "scope" (namespace, class), "fn", "other"
     header_start = 0
     fn_start = None
     for i, c in enumerate(s):
-        if c in ";}" or (c == "{"):
-            pass
         if c == "{":
             header = s[header_start:i]
             h = " ".join(header.split())
@@ -85,8 +91,21 @@ for path in sorted(root.glob("*/**/*.[ch]pp")):
         elif c in ":" and s[i - 1] != ":" and i + 1 < len(s) and s[i + 1] != ":" and \
                 re.search(r"\b(public|private|protected)\s*$", s[header_start:i]):
             header_start = i + 1
+    return found
 
-found.sort(reverse=True)
-for lines, where, name in found[: args.top]:
-    if lines >= args.min:
-        print(f"{lines:5d}  {name:32s} {where}")
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("root", nargs="?", default=".")
+    ap.add_argument("--top", type=int, default=15)
+    ap.add_argument("--min", type=int, default=0)
+    args = ap.parse_args()
+    root = pathlib.Path(args.root)
+    found = sorted(functions(root), reverse=True)
+    for lines, where, name in found[: args.top]:
+        if lines >= args.min:
+            print(f"{lines:5d}  {name:32s} {where}")
+
+
+if __name__ == "__main__":
+    main()
