@@ -284,5 +284,102 @@ reference_drift = 0.05
   EXPECT_EQ(doc["webhook"]["min_severity"], "warning");
 }
 
+// ---- the [mqtt] and [archive] sections
+
+void expect_config_error(const std::string& toml, const std::string& field, const std::string& text = {}) {
+  try {
+    (void)Config::parse(toml, "test.toml");
+    ADD_FAILURE() << "accepted: " << toml;
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), field) << e.what();
+    if (!text.empty()) {
+      EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(ArchiveConfig, BothOffByDefaultAndReadWhenGiven) {
+  const auto d = Config::parse("");
+  EXPECT_TRUE(d.mqtt.url.empty());
+  EXPECT_TRUE(d.archive.postgres.empty());
+  const auto c = Config::parse(R"(
+[mqtt]
+url = "mqtts://broker.lab:8884"
+instrument = "gcms-2"
+username = "gonio"
+password = "pw"
+qos = 2
+topic_prefix = "lab/gonio"
+ca_file = "/etc/ssl/lab-ca.pem"
+cert_file = "/etc/gonio/client.pem"
+key_file = "/etc/gonio/client.key"
+queue = 500
+keepalive_s = 10
+
+[archive]
+postgres = "host=db.lab dbname=gonio"
+instrument = "gcms-2"
+batch = 1000
+retry_max_s = 30
+max_backlog_age_s = 3600
+)");
+  EXPECT_EQ(c.mqtt.qos, 2);
+  EXPECT_EQ(c.mqtt.queue, 500u);
+  EXPECT_EQ(c.mqtt.topic_prefix, "lab/gonio");
+  const auto u = MqttUrl::parse(c.mqtt.url);
+  EXPECT_TRUE(u.tls);
+  EXPECT_EQ(u.host, "broker.lab");
+  EXPECT_EQ(u.port, 8884);
+  EXPECT_EQ(c.archive.batch, 1000u);
+  EXPECT_EQ(c.archive.retry_max, std::chrono::seconds(30));
+  EXPECT_EQ(c.archive.max_backlog_age, std::chrono::hours(1));
+  // --check-config's effective configuration parses back to the same.
+  const auto back = Config::parse(json_to_toml(c.to_json()));
+  EXPECT_EQ(back.mqtt.url, c.mqtt.url);
+  EXPECT_EQ(back.archive.postgres, c.archive.postgres);
+  EXPECT_EQ(back.archive.max_backlog_age, c.archive.max_backlog_age);
+}
+
+TEST(ArchiveConfig, TheEffectiveConfigurationShowsNoSecrets) {
+  const auto c = Config::parse(R"(
+[mqtt]
+url = "mqtt://broker.lab:1883"
+username = "gonio"
+password = "mqtt-secret"
+
+[archive]
+postgres = "host=db.lab password='pg secret' dbname=gonio"
+)");
+  const auto shown = c.to_json().dump();
+  EXPECT_EQ(shown.find("mqtt-secret"), std::string::npos) << shown;
+  EXPECT_EQ(shown.find("pg secret"), std::string::npos) << shown;
+  EXPECT_EQ(c.to_json()["archive"]["postgres"], "host=db.lab password=*** dbname=gonio");
+  const auto uri = Config::parse("[archive]\npostgres = \"postgresql://gonio:s3cret@db.lab/gonio\"\n");
+  EXPECT_EQ(uri.to_json()["archive"]["postgres"], "postgresql://gonio:***@db.lab/gonio");
+}
+
+TEST(ArchiveConfig, BadValuesNameTheKeyAndTheAllowedRange) {
+  expect_config_error("[mqtt]\nurl = \"http://x:1\"\n", "mqtt.url", "mqtt://HOST:PORT");
+  expect_config_error("[mqtt]\nurl = \"mqtt://x:0\"\n", "mqtt.url", "1..65535");
+  expect_config_error("[mqtt]\nurl = \"mqtt://x\"\nqos = 3\n", "mqtt.qos", "[0, 2]");
+  expect_config_error("[mqtt]\nurl = \"mqtt://x\"\nqueue = 1\n", "mqtt.queue");
+  expect_config_error("[mqtt]\nurl = \"mqtt://x\"\ninstrument = \"a/b\"\n", "mqtt.instrument", "A-Z a-z 0-9");
+  expect_config_error("[mqtt]\nurl = \"mqtt://x\"\ntopic_prefix = \"gonio/#\"\n", "mqtt.topic_prefix");
+  expect_config_error("[mqtt]\nurl = \"mqtt://x\"\nca_file = \"/ca.pem\"\n", "mqtt.url", "mqtts://");
+  expect_config_error("[mqtt]\nurl = \"mqtts://x\"\ncert_file = \"/c.pem\"\n", "mqtt.key_file");
+  expect_config_error("[mqtt]\ninstrument = \"a\"\n", "mqtt.url", "required");
+  expect_config_error("[mqtt]\nurl = \"mqtt://x\"\nbroker = 1\n", "mqtt.broker");
+  expect_config_error("[archive]\npostgres = \"host=x\"\nbatch = 0\n", "archive.batch", "[1, 5000]");
+  expect_config_error("[archive]\npostgres = \"host=x\"\nmax_backlog_age_s = 0\n", "archive.max_backlog_age_s");
+  expect_config_error("[archive]\npostgres = \"host=x\"\ninstrument = \"\"\nretry_max_s = 0\n",
+                      "archive.retry_max_s");
+  expect_config_error("[archive]\ninstrument = \"a\"\n", "archive.postgres", "required");
+  expect_config_error("[archive]\npostgres = \"host=x\"\ninstrument = \"a b\"\n", "archive.instrument");
+}
+
+TEST(ArchiveConfig, DefaultInstrumentIdIsAValidId) {
+  EXPECT_NO_THROW(check_instrument_id(default_instrument_id(), "instrument"));
+}
+
 }  // namespace
 }  // namespace gonio::daemon
