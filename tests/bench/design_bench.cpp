@@ -24,6 +24,8 @@ void BM_AdaptiveChoice(benchmark::State& state) {
   const Twin truth(InstrumentProfile{}, make_bsdf("conductor:alpha=0.02,eta=0.2,k=3.9", grid), grid);
   EstimatorOptions est;
   est.rel_se = 2e-3;
+  est.max_samples = 1ull << 22;  // the settings twin/design.md was measured with
+  est.replicates = 32;
   const auto pred = truth.predict_many(cand, est, 2);
   ParameterDesignOptions o;
   o.threads = 2;
@@ -70,6 +72,9 @@ void BM_AdaptiveStudy(benchmark::State& state) {
   so.truth = "conductor:alpha=0.02,eta=0.2,k=3.9";
   so.noise_rel = so.noise_abs = 0.002;
   so.max_points = 60;
+  so.measurement.rel_se = 1e-3;  // the settings twin/design.md was measured with
+  so.measurement.max_samples = 1ull << 22;
+  so.measurement.replicates = 32;
   so.parameters.threads = so.parameters.fit.threads = 2;
   so.parameters.target_rel_u = 4.8e-5;  // the uniform grid's, measured
   DesignStudy s;

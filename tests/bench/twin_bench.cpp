@@ -51,8 +51,10 @@ double max_rel_se(const Prediction& p) {
 void BM_TwinPredict(benchmark::State& state) {
   const auto& twin = twin_for(kSpecs[state.range(0)]);
   const auto g = Geometry::in_plane(45, state.range(1) == 0 ? 45 : 35);
-  EstimatorOptions o;
+  EstimatorOptions o;  // twin/performance.md's settings, tighter than the twin's defaults
   o.rel_se = 1e-3;
+  o.max_samples = 1ull << 22;
+  o.replicates = 32;
   std::uint64_t seed = 1, samples = 0;
   double rel = 0;
   for (auto _ : state) {
@@ -89,6 +91,7 @@ void BM_TwinEfficiency(benchmark::State& state) {
       o.rel_se = 1e-6;
       o.abs_se = 0;
       o.max_samples = budget;
+      o.replicates = 32;
       o.seed = static_cast<std::uint64_t>(seed);
       const auto t0 = std::chrono::steady_clock::now();
       const auto p = twin.predict(g, o);
@@ -120,8 +123,10 @@ BENCHMARK(BM_TwinEfficiency)
 void BM_TwinScan1000(benchmark::State& state) {
   const auto& twin = twin_for("conductor:alpha=0.1,eta=0.2,k=3.9");
   const auto geometries = parse_geometry_grid("in=15,45,75;out=-83:83.5:0.5");
-  EstimatorOptions o;
+  EstimatorOptions o;  // twin/performance.md's settings, tighter than the twin's defaults
   o.rel_se = 1e-3;
+  o.max_samples = 1ull << 22;
+  o.replicates = 32;
   for (auto _ : state) {
     const auto p = twin.predict_many(geometries, o, static_cast<unsigned>(state.range(0)));
     benchmark::DoNotOptimize(p.data());

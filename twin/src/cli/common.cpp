@@ -21,12 +21,22 @@ void ModelOptions::add_to(CLI::App& app, bool need_bsdf) {
   app.add_option("--estimator", estimator, "rqmc or baseline")
       ->check(CLI::IsMember({"rqmc", "baseline"}))
       ->capture_default_str();
-  app.add_option("--rel-se", rel_se, "target relative standard error per channel (goniod's [twin] rel_se: 0.002, "
-                 "looser so that a prediction keeps up with the arms)")
+  // A command whose own default differs from the twin's (render) says so, with the twin's;
+  // the others share goniod's [twin] defaults (estimator_options.hpp).
+  const EstimatorOptions twin_defaults;
+  const auto own = [](bool differs, auto twin_value) {
+    return differs ? fmt::format(" (this command's own; the twin's and goniod's [twin] default: {})", twin_value)
+                   : std::string();
+  };
+  app.add_option("--rel-se", rel_se,
+                 "target relative standard error per channel" + own(rel_se != twin_defaults.rel_se, twin_defaults.rel_se))
       ->capture_default_str();
-  app.add_option("--max-samples", max_samples, "sample budget per geometry (goniod's [twin] max_samples: 1048576)")
+  app.add_option("--max-samples", max_samples,
+                 "sample budget per geometry" + own(max_samples != twin_defaults.max_samples, twin_defaults.max_samples))
       ->capture_default_str();
-  app.add_option("--replicates", replicates, "independent randomisations (standard error; goniod's [twin] replicates: 16)")
+  app.add_option("--replicates", replicates,
+                 "independent randomisations (standard error)" +
+                     own(replicates != twin_defaults.replicates, twin_defaults.replicates))
       ->capture_default_str();
   app.add_option("--seed", seed, "random seed (results are deterministic per seed)")
       ->capture_default_str();

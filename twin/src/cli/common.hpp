@@ -24,9 +24,10 @@ struct ModelOptions {
   std::string bsdf;
   std::string wavelengths = "400:700:10";
   std::string estimator = "rqmc";
-  double rel_se = 1e-3;
-  std::uint64_t max_samples = 1ull << 22;
-  int replicates = 32;
+  // The twin's defaults, goniod's too (estimator_options.hpp); render asks for less.
+  double rel_se = EstimatorOptions{}.rel_se;
+  std::uint64_t max_samples = EstimatorOptions{}.max_samples;
+  int replicates = EstimatorOptions{}.replicates;
   std::uint64_t seed = 1;
   unsigned threads = 0;
   // Calibration overrides of the profile.

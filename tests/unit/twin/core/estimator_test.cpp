@@ -175,6 +175,7 @@ TEST(Twin, StandardErrorIsHonest) {
   for (int s = 0; s < trials; ++s) {
     EstimatorOptions o;
     o.rel_se = 2e-2;
+    o.replicates = 32;
     o.seed = 1000 + static_cast<std::uint64_t>(s);
     const auto p = twin.predict(g, o);
     if (std::abs(p.beta[0] - truth.beta[0]) <= 3 * p.std_error[0]) ++inside;

@@ -14,28 +14,10 @@
 #include "gonio/proto/geometry.hpp"
 #include "gonio/proto/spectrum.hpp"
 #include "gonio/twin/bsdf.hpp"
+#include "gonio/twin/estimator_options.hpp"
 #include "gonio/twin/instrument.hpp"
 
 namespace gonio::twin {
-
-enum class EstimatorKind {
-  rqmc,      // Owen-scrambled Sobol, analytic footprint overlap, MIS of aperture and BSDF
-  baseline,  // the founding paper's scheme: uniform pupil sampling, (n·v)^4, plain MC
-};
-
-struct EstimatorOptions {
-  EstimatorKind kind = EstimatorKind::rqmc;
-  double rel_se = 1e-3;                   // stop when every channel has s.e. ≤ rel_se·β
-  double abs_se = 1e-6;                   // ... or s.e. ≤ abs_se (β units), for dark channels
-  std::uint64_t max_samples = 1ull << 22; // budget per geometry, sample + reference paths
-  int replicates = 32;                    // R independent randomisations
-  // Points per replicate before the first convergence check (a power of two), doubled
-  // until the target holds. Fewer let easy geometries stop sooner; the check's reliability
-  // rests on the R replicates, not on this.
-  std::uint64_t first_points = 64;
-  std::uint64_t seed = 1;
-  void validate() const;
-};
 
 // How the rqmc estimator drew the sample's source directions (estimator.hpp): uniformly over
 // the aperture; that and BSDF sampling (power heuristic); from the lobe's own shape alone;

@@ -21,6 +21,7 @@
 
 #include "gonio/drivers/motion/limits.hpp"
 #include "gonio/proto/enum_text.hpp"
+#include "gonio/twin/estimator_options.hpp"
 
 namespace gonio::json_util {
 class ObjectReader;
@@ -183,9 +184,10 @@ struct Config {
 
   // [twin]
   unsigned twin_threads = 0;  // 0: hardware concurrency
-  double twin_rel_se = 2e-3;
-  std::uint64_t twin_max_samples = 1ull << 20;
-  int twin_replicates = 16;
+  // The twin's own defaults (gonio-twin starts from the same).
+  double twin_rel_se = twin::EstimatorOptions{}.rel_se;
+  std::uint64_t twin_max_samples = twin::EstimatorOptions{}.max_samples;
+  int twin_replicates = twin::EstimatorOptions{}.replicates;
   std::uint64_t twin_seed = 1;
   std::string twin_data_dir;  // '@file' BSDF specs from clients: only here (empty: <state-dir>/data)
 
