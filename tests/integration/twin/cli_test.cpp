@@ -100,15 +100,15 @@ TEST(GonioTwinCli, BadValuesNameTheFieldAndExitTwo) {
 TEST(GonioTwinCli, ErrorMapWritesCsvPlotAndSummary) {
   TempDir dir;
   const auto prefix = (dir.path() / "map").string();
-  const auto r = gonio_twin("error-map --bsdf conductor:alpha=0.05,eta=0.2,k=3.9 --grid "
-                            "'in=45;out=30:60:2' --wavelengths 400:700:100 --rel-se 0.005 "
-                            "--json --output " + prefix);
+  auto r = gonio_twin("error-map --bsdf conductor:alpha=0.05,eta=0.2,k=3.9 --grid "
+                      "'in=45;out=30:60:2' --wavelengths 400:700:100 --rel-se 0.005 "
+                      "--json --output " + prefix + ".csv");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto s = nlohmann::json::parse(r.out);
   // Aperture averaging flattens the specular peak.
   EXPECT_LT(s["peak_error"]["45"].get<double>(), -0.05);
   ASSERT_TRUE(fs::exists(prefix + ".csv"));
-  ASSERT_TRUE(fs::exists(prefix + ".png"));
+  ASSERT_TRUE(fs::exists(prefix + ".png"));  // beside the CSV unless --plot says where
   std::ifstream png(prefix + ".png", std::ios::binary);
   char magic[8];
   png.read(magic, 8);
@@ -118,6 +118,16 @@ TEST(GonioTwinCli, ErrorMapWritesCsvPlotAndSummary) {
   int rows = 0;
   while (std::getline(csv, line)) ++rows;
   EXPECT_EQ(rows, 1 + 16 * 4);  // header + geometries × channels
+
+  // --output used to be a prefix: a name without .csv still is, with a note.
+  const auto old = (dir.path() / "old").string();
+  r = gonio_twin("error-map --bsdf lambert --grid 'in=45;out=30:34:2' --wavelengths 550 --rel-se 0.01 "
+                 "--output " + old + " --plot " + (dir.path() / "elsewhere.svg").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("--output is the CSV file now"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(old + ".csv"));
+  EXPECT_TRUE(fs::exists(dir.path() / "elsewhere.svg"));
+  EXPECT_FALSE(fs::exists(old + ".png"));
 }
 
 TEST(GonioTwinCli, PlanPrintsAGridThatParsesBack) {

@@ -9,6 +9,7 @@
 #include "cli/common.hpp"
 #include "cli/fit_output.hpp"
 #include "cli/output.hpp"
+#include "cli/progress.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/text.hpp"
 
@@ -37,7 +38,11 @@ void add_calibrate(CLI::App& app) {
       const auto data = load_measured(o->measured, o->table_u);
       const auto profile = o->load_profile();
       const auto options = o->options();
-      const auto r = calibrate(data, *sample, names, profile, options);
+      const auto r = [&] {
+        Ticker ticker("calibrate");  // erased before the result is printed
+        ticker.step(fmt::format("fitting {} to {} points", *fit, data.points.size()));
+        return calibrate(data, *sample, names, profile, options);
+      }();
       if (o->json)
         std::cout << r.to_json().dump(2) << '\n';
       else
@@ -53,6 +58,8 @@ void add_calibrate(CLI::App& app) {
       if (!o->plot.empty()) {
         auto high = options;
         high.samples = std::max<std::uint64_t>(options.samples, 1u << 16);
+        Ticker ticker("calibrate");
+        ticker.step("correcting the measured points");
         plot_fit(o->plot, correct(data, r.spec, *r.profile, high),
                  fmt::format("calibration on {}", r.spec), r);
       }

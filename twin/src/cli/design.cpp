@@ -11,6 +11,7 @@
 
 #include "cli/common.hpp"
 #include "cli/output.hpp"
+#include "cli/progress.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/text.hpp"
 #include "gonio/twin/design.hpp"
@@ -91,7 +92,11 @@ void add_design(CLI::App& app) {
       so.parameters.fit.threads = model->threads;
       so.curve.tolerance = o->tolerance;
       so.curve.timing = o->timing;
-      const auto study = study_design(o->model, candidates, model->grid(), model->load_profile(), so);
+      const auto study = [&] {
+        Ticker ticker("design");  // erased before the result is printed
+        ticker.step(fmt::format("studying {} candidates", candidates.size()));
+        return study_design(o->model, candidates, model->grid(), model->load_profile(), so);
+      }();
       if (o->json) {
         std::cout << study.to_json(candidates).dump(2) << '\n';
         return kExitOk;

@@ -29,7 +29,8 @@ namespace {
 
 struct ErrorMapOptions {
   std::string grid = "in=15,45,75;out=-85:85:1";
-  std::string out = "error-map";
+  std::string out = "error-map.csv";
+  std::string plot;  // default: the CSV's name with .png
   double floor = 0.01;
   bool log = false;
   bool json = false;
@@ -76,8 +77,10 @@ void add_error_map(CLI::App& app) {
   auto o = std::make_shared<ErrorMapOptions>();
   model->add_to(*sub);
   sub->add_option("--grid", o->grid, "geometry grid")->capture_default_str();
-  sub->add_option("--output", o->out, "output prefix: PREFIX.csv and PREFIX.png")
+  sub->add_option("--output", o->out,
+                  "the CSV file (a name without .csv is the old prefix: PREFIX.csv and PREFIX.png)")
       ->capture_default_str();
+  sub->add_option("--plot", o->plot, "the plot (.png, .svg, .pdf; default: the CSV's name with .png)");
   sub->add_option("--floor", o->floor, "ignore true β below floor × peak in relative errors")
       ->capture_default_str();
   sub->add_flag("--log", o->log, "logarithmic β axis in the plot");
@@ -85,8 +88,18 @@ void add_error_map(CLI::App& app) {
   sub->callback([model, o] {
     exit_code() = guarded([&] {
       if (!(o->floor >= 0 && o->floor < 1)) throw Error::out_of_range("floor", o->floor, 0, 1);
+      // --output is a file, as for the other commands; before, error-map took a prefix.
+      const bool prefix = !o->out.ends_with(".csv");
+      if (prefix)
+        std::cerr << "gonio-twin error-map: --output is the CSV file now; '" << o->out
+                  << "' is taken as the old prefix (give --output " << o->out << ".csv)\n";
+      const auto csv_path = prefix ? o->out + ".csv" : o->out;
+      const auto png_path =
+          !o->plot.empty() ? o->plot : csv_path.substr(0, csv_path.size() - 4) + ".png";
       const auto twin = model->make_twin();
       const auto geometries = parse_geometry_grid(o->grid);
+      Ticker ticker("error-map");
+      ticker.step(fmt::format("measuring {} geometries", geometries.size()));
       const auto pred = twin.predict_many(geometries, model->estimator_options(), model->threads);
       std::vector<ErrorMapRow> rows;
       for (const auto& p : pred) {
@@ -95,7 +108,6 @@ void add_error_map(CLI::App& app) {
         rows.push_back({p.geometry, channel_mean(t), channel_mean(p.beta), channel_mean(p.std_error)});
       }
       // CSV with every channel.
-      const auto csv_path = o->out + ".csv";
       std::ofstream csv(csv_path);
       if (!csv) throw Error(Errc::io_error, fmt::format("cannot write '{}'", csv_path), "output");
       csv << "theta_i,phi_i,theta_r,phi_r,wavelength_nm,true_beta,virtual_beta,std_error,"
@@ -110,7 +122,7 @@ void add_error_map(CLI::App& app) {
       }
       csv.close();
       if (!csv) throw Error(Errc::io_error, fmt::format("cannot write '{}'", csv_path), "output");
-      const auto png_path = o->out + ".png";
+      ticker.step("writing " + png_path);
       plot_error_map(png_path, rows, twin.sample().spec(), o->log);
 
       const auto s = summarise(rows, o->floor);

@@ -12,6 +12,7 @@
 #include "cli/common.hpp"
 #include "cli/fit_output.hpp"
 #include "cli/output.hpp"
+#include "cli/progress.hpp"
 #include "gonio/proto/error.hpp"
 #include "gonio/proto/text.hpp"
 #include "gonio/twin/bsdf_io.hpp"
@@ -22,6 +23,7 @@
 namespace gonio::twin::cli {
 
 void FitCliOptions::add_to(CLI::App& app) {
+  command = app.get_name();
   app.add_option("--measured", measured,
                  "measured data: goniod's scan export (.csv or .json) or a tabulated BSDF "
                  "(.bsdf IS-SA, .ssdd)")
@@ -31,9 +33,13 @@ void FitCliOptions::add_to(CLI::App& app) {
   app.add_option("--calibration", calibration,
                  "override the profile's calibration: per-geometry or fixed")
       ->check(CLI::IsMember({"per-geometry", "fixed"}));
-  app.add_option("--samples", fit.samples,
-                 "twin paths per geometry and evaluation (sample + reference), fixed")
-      ->capture_default_str();
+  samples = app.add_option("--samples", fit.samples,
+                           "twin paths per geometry and evaluation (sample + reference), all spent "
+                           "by every evaluation (a fixed budget, not --max-samples' ceiling)")
+                ->capture_default_str();
+  // The other commands' --max-samples is a ceiling that --rel-se usually stops short of; a
+  // fit has no --rel-se, so the spelling is taken for its budget, with a note.
+  max_samples = app.add_option("--max-samples", fit.samples)->group("");
   app.add_option("--replicates", fit.replicates, "independent randomisations (standard error)")
       ->capture_default_str();
   app.add_option("--seed", fit.seed, "random seed, the same at every evaluation")
@@ -62,6 +68,10 @@ void FitCliOptions::add_to(CLI::App& app) {
 }
 
 FitOptions FitCliOptions::options() const {
+  if (samples->count() > 0 && max_samples->count() > 0)
+    throw Error::invalid("samples", "give --samples alone (a fit's fixed budget; --max-samples is taken for it)");
+  if (max_samples->count() > 0)
+    std::cerr << "gonio-twin " << command << ": a fit spends a fixed budget, --samples; --max-samples was taken as it\n";
   auto o = fit;
   o.naive = !no_naive;
   o.validate();
@@ -291,7 +301,11 @@ void add_fit(CLI::App& app) {
       const auto data = load_measured(o->measured, o->table_u);
       const auto profile = o->load_profile();
       const auto options = o->options();
-      const auto r = fit_material(data, *model, profile, options);
+      const auto r = [&] {
+        Ticker ticker("fit");  // erased before the result is printed
+        ticker.step(fmt::format("fitting {} to {} points", *model, data.points.size()));
+        return fit_material(data, *model, profile, options);
+      }();
       if (o->json)
         std::cout << r.to_json().dump(2) << '\n';
       else
@@ -305,6 +319,8 @@ void add_fit(CLI::App& app) {
       if (!corrected->empty() || !o->plot.empty()) {
         auto high = options;
         high.samples = std::max<std::uint64_t>(options.samples, 1u << 16);
+        Ticker ticker("fit");
+        ticker.step("correcting the measured points");
         const auto points = correct(data, r.spec, profile, high);
         if (!corrected->empty()) write_corrected(*corrected, points, data.wavelengths, r.spec);
         if (!o->plot.empty()) plot_fit(o->plot, points, "fit of " + *model, r);

@@ -20,9 +20,12 @@ struct FitCliOptions {
   bool no_naive = false;
   bool json = false;
   std::string plot;
+  std::string command;  // fit or calibrate
+  CLI::Option* samples = nullptr;
+  CLI::Option* max_samples = nullptr;  // the common options' spelling, taken for --samples
 
   void add_to(CLI::App& app);
-  FitOptions options() const;
+  FitOptions options() const;  // says on stderr when --max-samples stood for --samples
   InstrumentProfile load_profile() const;
 };
 
