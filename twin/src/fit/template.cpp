@@ -41,70 +41,81 @@ bool number_char(std::string_view s, std::size_t i) {
   return c == '+' && i > 0 && (s[i - 1] == 'e' || s[i - 1] == 'E');
 }
 
-}  // namespace
-
-ModelTemplate::ModelTemplate(std::string_view spec, const WavelengthGrid& grid)
-    : text_(spec), grid_(grid) {
-  if (grid.empty()) throw Error::invalid("wavelengths", "a model needs at least one wavelength");
-  // 1. Cut the marks out of the text.
-  std::vector<RawMark> raw;
+// 1. The marks cut out of the text: the literal pieces between them and the spec with each
+// mark replaced by its sentinel.
+struct CutSpec {
+  std::vector<RawMark> marks;
+  std::vector<std::string> literals;  // marks.size() + 1 pieces
   std::string substituted;
+};
+
+// The mark at spec[i] == '?': ?, ?*, ?START, ?START[LO,HI]; `i` moves past it.
+RawMark read_mark(std::string_view spec, std::size_t& i, std::size_t index) {
+  const std::size_t at = i++;
+  RawMark m;
+  if (i < spec.size() && spec[i] == '*') m.per_channel = true, ++i;
+  std::size_t j = i;
+  while (j < spec.size() && number_char(spec, j)) ++j;
+  const auto field = fmt::format("model (mark {} at offset {})", index + 1, at);
+  if (j > i) m.start = text::parse_double(field, spec.substr(i, j - i));
+  i = j;
+  if (i < spec.size() && spec[i] == '[') {
+    const auto close = spec.find(']', i);
+    if (close == std::string_view::npos)
+      throw Error::invalid(field, "'[' without ']': bounds are written [lo,hi]");
+    const auto parts = text::split(spec.substr(i + 1, close - i - 1), ',');
+    if (parts.size() != 2) throw Error::invalid(field, "bounds are written [lo,hi]");
+    const double lo = text::parse_double(field, text::trim(parts[0]));
+    const double hi = text::parse_double(field, text::trim(parts[1]));
+    if (!(lo < hi)) throw Error::invalid(field, fmt::format("bounds [{:g},{:g}] are empty", lo, hi));
+    m.bounds = std::pair{lo, hi};
+    i = close + 1;
+  }
+  // A mark ends where its value would: at ',', '+', white space or the end. Anything else
+  // ("alpha=?x") is a typo in the mark, reported here rather than as a bad number later.
+  if (i < spec.size() && spec[i] != ',' && spec[i] != '+' && !std::isspace(static_cast<unsigned char>(spec[i])))
+    throw Error::invalid(field, fmt::format("unexpected '{}' after the '?' mark: write ?, ?START "
+                                            "or ?START[LO,HI]", spec[i]));
+  return m;
+}
+
+CutSpec cut_marks(std::string_view spec) {
+  CutSpec out;
   std::string literal;
   for (std::size_t i = 0; i < spec.size();) {
     if (spec[i] != '?') {
       literal += spec[i++];
       continue;
     }
-    if (raw.size() == kMaxMarks)
+    if (out.marks.size() == kMaxMarks)
       throw Error::invalid("model", fmt::format("more than {} '?' marks", kMaxMarks));
-    const std::size_t at = i++;
-    RawMark m;
-    if (i < spec.size() && spec[i] == '*') m.per_channel = true, ++i;
-    std::size_t j = i;
-    while (j < spec.size() && number_char(spec, j)) ++j;
-    const auto field = fmt::format("model (mark {} at offset {})", raw.size() + 1, at);
-    if (j > i) m.start = text::parse_double(field, spec.substr(i, j - i));
-    i = j;
-    if (i < spec.size() && spec[i] == '[') {
-      const auto close = spec.find(']', i);
-      if (close == std::string_view::npos)
-        throw Error::invalid(field, "'[' without ']': bounds are written [lo,hi]");
-      const auto parts = text::split(spec.substr(i + 1, close - i - 1), ',');
-      if (parts.size() != 2) throw Error::invalid(field, "bounds are written [lo,hi]");
-      const double lo = text::parse_double(field, text::trim(parts[0]));
-      const double hi = text::parse_double(field, text::trim(parts[1]));
-      if (!(lo < hi)) throw Error::invalid(field, fmt::format("bounds [{:g},{:g}] are empty", lo, hi));
-      m.bounds = std::pair{lo, hi};
-      i = close + 1;
-    }
-    // A mark ends where its value would: at ',', '+', white space or the end. Anything else
-    // ("alpha=?x") is a typo in the mark, reported here rather than as a bad number later.
-    if (i < spec.size() && spec[i] != ',' && spec[i] != '+' && !std::isspace(static_cast<unsigned char>(spec[i])))
-      throw Error::invalid(field, fmt::format("unexpected '{}' after the '?' mark: write ?, ?START "
-                                              "or ?START[LO,HI]", spec[i]));
-    literal_.push_back(literal);
-    substituted += literal + sentinel_text(raw.size());
+    out.marks.push_back(read_mark(spec, i, out.marks.size()));
+    out.literals.push_back(literal);
+    out.substituted += literal + sentinel_text(out.marks.size() - 1);
     literal.clear();
-    raw.push_back(m);
   }
-  literal_.push_back(literal);
-  substituted += literal;
-  if (raw.empty())
+  out.literals.push_back(literal);
+  out.substituted += literal;
+  if (out.marks.empty())
     throw Error::invalid("model", "no free parameter: mark at least one value with '?' "
                                   "(e.g. conductor:alpha=?,eta=0.2,k=3.9)");
+  return out;
+}
 
-  // 2. Find where each sentinel landed.
+// 2. Where a sentinel landed: the parameter it is the value of.
+struct Found {
+  std::string name;             // parameter name without a wavelength
+  const bsdf::ParamInfo* info = nullptr;
+  std::optional<double> pair_nm;  // the mark is the value of this pair
+  bool found = false;
+};
+
+std::vector<Found> locate_marks(const std::string& substituted, std::size_t marks) {
   const auto lobes = bsdf::parse_spec_string(substituted);
   std::map<std::string, int> name_count;
   for (const auto& l : lobes) ++name_count[l.name];
   std::map<std::string, int> name_seen;
-  struct Found {
-    std::string name;             // parameter name without a wavelength
-    const bsdf::ParamInfo* info = nullptr;
-    std::optional<double> pair_nm;  // the mark is the value of this pair
-    bool found = false;
-  };
-  std::vector<Found> found(raw.size());
+  std::vector<Found> found(marks);
   for (const auto& l : lobes) {
     const int n = ++name_seen[l.name];
     if (l.name.empty()) continue;  // a tabulated file has no parameters
@@ -115,7 +126,7 @@ ModelTemplate::ModelTemplate(std::string_view spec, const WavelengthGrid& grid)
       const auto& key = arg.first;
       const auto& value = arg.second;
       const auto locate = [&](double v, std::optional<double> nm) {
-        for (std::size_t k = 0; k < raw.size(); ++k) {
+        for (std::size_t k = 0; k < marks; ++k) {
           if (v != sentinel_value(k)) continue;
           if (model == nullptr)
             throw Error::invalid("model", fmt::format("unknown lobe '{}'", l.name));
@@ -132,42 +143,56 @@ ModelTemplate::ModelTemplate(std::string_view spec, const WavelengthGrid& grid)
         for (const auto& [nm, v] : value.pairs) locate(v, nm);
     }
   }
+  return found;
+}
 
-  // 3. The free parameters, with their starts and bounds.
-  for (std::size_t k = 0; k < raw.size(); ++k) {
-    const auto& m = raw[k];
+// 3. A free parameter: its bounds (the model's, or the mark's inside them) and its start.
+FreeParameter free_parameter(const RawMark& m, const Found& f, std::size_t index) {
+  if (!f.found)
+    throw Error::invalid("model", fmt::format("the '?' mark {} is not the value of a "
+                                              "parameter (write key=?)", index + 1));
+  const auto& p = *f.info;
+  const auto field = "bsdf." + f.name;
+  if ((m.per_channel || f.pair_nm) && !p.spectral)
+    throw Error::invalid(field, "is a scalar parameter: it cannot be free per wavelength");
+  if (m.per_channel && f.pair_nm)
+    throw Error::invalid(field, "'?*' stands for a whole spectrum, not for one pair's value");
+  double lo = p.lo_open ? (p.lo == 0 ? p.hi * 1e-4 : p.lo + 1e-9 * (p.hi - p.lo)) : p.lo;
+  double hi = p.hi;
+  if (m.bounds) {
+    if (m.bounds->first < lo || m.bounds->second > hi)
+      throw Error(Errc::out_of_range,
+                  fmt::format("{}: bounds [{:g},{:g}] leave the parameter's range [{:g},{:g}]",
+                              field, m.bounds->first, m.bounds->second, p.lo, p.hi),
+                  field);
+    lo = m.bounds->first, hi = m.bounds->second;
+  }
+  double start = m.start.value_or(p.fallback);
+  if (m.start && (start < lo || start > hi))
+    throw Error::out_of_range(field, start, lo, hi);
+  // A start on a bound would sit where the bounded transform is flat: move it inside, by
+  // 10⁻³ of the range in the coordinate the parameter is fitted in.
+  const bool log_scale = lo > 0 && hi / lo >= 10;
+  if (log_scale)
+    start = std::exp(std::clamp(std::log(start), std::log(lo) + 1e-3 * std::log(hi / lo),
+                                std::log(hi) - 1e-3 * std::log(hi / lo)));
+  else
+    start = std::clamp(start, lo + 1e-3 * (hi - lo), hi - 1e-3 * (hi - lo));
+  return FreeParameter{f.name, start, lo, hi, log_scale};
+}
+
+}  // namespace
+
+ModelTemplate::ModelTemplate(std::string_view spec, const WavelengthGrid& grid)
+    : text_(spec), grid_(grid) {
+  if (grid.empty()) throw Error::invalid("wavelengths", "a model needs at least one wavelength");
+  auto cut = cut_marks(spec);
+  literal_ = std::move(cut.literals);
+  const auto found = locate_marks(cut.substituted, cut.marks.size());
+  for (std::size_t k = 0; k < cut.marks.size(); ++k) {
+    const auto& m = cut.marks[k];
     const auto& f = found[k];
-    if (!f.found)
-      throw Error::invalid("model", fmt::format("the '?' mark {} is not the value of a "
-                                                "parameter (write key=?)", k + 1));
-    const auto& p = *f.info;
-    const auto field = "bsdf." + f.name;
-    if ((m.per_channel || f.pair_nm) && !p.spectral)
-      throw Error::invalid(field, "is a scalar parameter: it cannot be free per wavelength");
-    if (m.per_channel && f.pair_nm)
-      throw Error::invalid(field, "'?*' stands for a whole spectrum, not for one pair's value");
-    double lo = p.lo_open ? (p.lo == 0 ? p.hi * 1e-4 : p.lo + 1e-9 * (p.hi - p.lo)) : p.lo;
-    double hi = p.hi;
-    if (m.bounds) {
-      if (m.bounds->first < lo || m.bounds->second > hi)
-        throw Error(Errc::out_of_range,
-                    fmt::format("{}: bounds [{:g},{:g}] leave the parameter's range [{:g},{:g}]",
-                                field, m.bounds->first, m.bounds->second, p.lo, p.hi),
-                    field);
-      lo = m.bounds->first, hi = m.bounds->second;
-    }
-    double start = m.start.value_or(p.fallback);
-    if (m.start && (start < lo || start > hi))
-      throw Error::out_of_range(field, start, lo, hi);
-    // A start on a bound would sit where the bounded transform is flat: move it inside, by
-    // 10⁻³ of the range in the coordinate the parameter is fitted in.
-    const bool log_scale = lo > 0 && hi / lo >= 10;
-    if (log_scale)
-      start = std::exp(std::clamp(std::log(start), std::log(lo) + 1e-3 * std::log(hi / lo),
-                                  std::log(hi) - 1e-3 * std::log(hi / lo)));
-    else
-      start = std::clamp(start, lo + 1e-3 * (hi - lo), hi - 1e-3 * (hi - lo));
-    FreeParameter fp{f.name, start, lo, hi, log_scale};
+    auto fp = free_parameter(m, f, k);
     Mark mark{params_.size(), m.per_channel ? grid_.size() : 1};
     if (m.per_channel) {
       for (std::size_t c = 0; c < grid_.size(); ++c) {
