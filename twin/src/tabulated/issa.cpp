@@ -300,131 +300,132 @@ TabulatedParts read_issa(const std::string& path) {
   return read_issa(in, path);
 }
 
-std::vector<std::string> write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
-                                    const IssaWriteOptions& o) {
-  if (table.empty()) throw Error::invalid("table", "is empty");
-  if (!table.isotropic())
-    throw Error(Errc::unsupported,
-                "an IS-SA file holds one sample rotation; an anisotropic table needs .ssdd",
-                "table");
-  // Spectral content: one grey table per output channel.
+namespace {
+
+// The file's spectral content: one grey table per output channel (X, Y, Z or the weighted one).
+std::vector<BsdfTable> output_channels(const BsdfTable& table, const IssaWriteOptions& o) {
   std::vector<BsdfTable> channels;
   if (o.xyz_weights) {
     for (int k = 0; k < 3; ++k)
       channels.push_back(table.weighted((*o.xyz_weights)[static_cast<std::size_t>(k)]));
-  } else {
-    std::vector<double> w = o.weights;
-    if (w.empty()) w.assign(table.channels(), 1.0);
-    if (w.size() != table.channels())
-      throw Error::invalid("weights", fmt::format("has {} weights for {} channels", w.size(),
-                                                  table.channels()));
-    const double sum = std::accumulate(w.begin(), w.end(), 0.0);
-    if (!(sum > 0) || !std::isfinite(sum)) throw Error::invalid("weights", "must have a positive sum");
-    for (auto& x : w) x /= sum;
-    channels.push_back(table.weighted(w));
+    return channels;
   }
+  std::vector<double> w = o.weights;
+  if (w.empty()) w.assign(table.channels(), 1.0);
+  if (w.size() != table.channels())
+    throw Error::invalid("weights", fmt::format("has {} weights for {} channels", w.size(),
+                                                table.channels()));
+  const double sum = std::accumulate(w.begin(), w.end(), 0.0);
+  if (!(sum > 0) || !std::isfinite(sum)) throw Error::invalid("weights", "must have a positive sum");
+  for (auto& x : w) x /= sum;
+  channels.push_back(table.weighted(w));
+  return channels;
+}
 
-  const bool native = table.param() == TableParam::specular && table.isotropic() &&
-                      o.incidence.empty() && o.azimuth.empty() && o.radial.empty();
-  const bool plane = table.reduction().bilateral ||
-                     (table.param() == TableParam::half_difference && table.isotropic() &&
-                      table.reduction().reciprocal);
-  std::vector<double> incidence = o.incidence, azimuth = o.azimuth, radial = o.radial;
-  if (incidence.empty()) {
-    if (table.param() == TableParam::half_difference) incidence = range(0, 80, 10);
-    else incidence = table.axis(0);
+// The file's grid: the options' lists, else the table's own (a specular table written as it
+// is) or the defaults.
+struct IssaGrid {
+  bool native = false;  // the table's own grid: its values are written as they are
+  bool plane = false;   // PlaneSymmetrical: azimuths 0–180°
+  std::vector<double> incidence, azimuth, radial;
+};
+
+IssaGrid issa_grid(const BsdfTable& table, const IssaWriteOptions& o) {
+  IssaGrid g;
+  g.native = table.param() == TableParam::specular && table.isotropic() && o.incidence.empty() &&
+             o.azimuth.empty() && o.radial.empty();
+  g.plane = table.reduction().bilateral ||
+            (table.param() == TableParam::half_difference && table.isotropic() &&
+             table.reduction().reciprocal);
+  g.incidence = o.incidence, g.azimuth = o.azimuth, g.radial = o.radial;
+  if (g.incidence.empty()) {
+    if (table.param() == TableParam::half_difference) g.incidence = range(0, 80, 10);
+    else g.incidence = table.axis(0);
   }
-  if (azimuth.empty())
-    azimuth = native ? table.axis(3) : plane ? range(0, 180, 5) : range(0, 355, 5);
-  if (radial.empty()) radial = native ? table.axis(2) : default_radial();
+  if (g.azimuth.empty())
+    g.azimuth = g.native ? table.axis(3) : g.plane ? range(0, 180, 5) : range(0, 355, 5);
+  if (g.radial.empty()) g.radial = g.native ? table.axis(2) : default_radial();
   if (o.keep_gaps && o.radial.empty() && table.param() == TableParam::spherical) {
     // The in-plane nodes' distances from the specular direction: ahead of it (φo = 180°)
     // |θo − θi|, behind it through the normal (φo = 0°) θi + θo.
     for (const double ti : table.axis(0))
       for (const double to : table.axis(2)) {
-        radial.push_back(std::abs(to - ti));
-        if (ti + to <= 180) radial.push_back(ti + to);
+        g.radial.push_back(std::abs(to - ti));
+        if (ti + to <= 180) g.radial.push_back(ti + to);
       }
-    std::sort(radial.begin(), radial.end());
-    radial.erase(std::unique(radial.begin(), radial.end(), [](double a, double b) { return b - a < 1e-9; }),
-                 radial.end());
+    std::sort(g.radial.begin(), g.radial.end());
+    g.radial.erase(std::unique(g.radial.begin(), g.radial.end(), [](double a, double b) { return b - a < 1e-9; }),
+                   g.radial.end());
   }
-  check_option_list(incidence, "incidence", 0, 90);
-  check_option_list(azimuth, "azimuth", 0, plane ? 180 : 360);
-  check_option_list(radial, "radial", 0, 180);
+  check_option_list(g.incidence, "incidence", 0, 90);
+  check_option_list(g.azimuth, "azimuth", 0, g.plane ? 180 : 360);
+  check_option_list(g.radial, "radial", 0, 180);
+  return g;
+}
 
-  // The file's own tables: the values exactly as written, so that TIS is the integral of
-  // what a reader interpolates, not of the table they were resampled from.
+// The file's own tables: the values exactly as written, so that TIS is the integral of
+// what a reader interpolates, not of the table they were resampled from.
+std::vector<BsdfTable> file_tables(const std::vector<BsdfTable>& channels, const IssaGrid& g,
+                                   bool keep_gaps) {
   std::vector<BsdfTable> file;
   for (const BsdfTable& t : channels) {
-    if (native) {
+    if (g.native) {
       file.push_back(t);
       continue;
     }
-    std::vector<double> v(incidence.size() * radial.size() * azimuth.size());
+    std::vector<double> v(g.incidence.size() * g.radial.size() * g.azimuth.size());
     double f = 0;
-    for (std::size_t i = 0; i < incidence.size(); ++i) {
-      const double th = incidence[i] * kDegToRad;
+    for (std::size_t i = 0; i < g.incidence.size(); ++i) {
+      const double th = g.incidence[i] * kDegToRad;
       const Vec3 wi{-std::sin(th), 0, std::cos(th)};
       const auto frame = tab::MirrorFrame::of(wi);
-      for (std::size_t a = 0; a < azimuth.size(); ++a)
-        for (std::size_t j = 0; j < radial.size(); ++j) {
+      for (std::size_t a = 0; a < g.azimuth.size(); ++a)
+        for (std::size_t j = 0; j < g.radial.size(); ++j) {
           // Beyond the horizon the file still needs a value; the one at the horizon along
           // the same azimuth keeps interpolation near grazing angles unbiased.
-          const Vec3 wo = frame.direction_above(radial[j] * kDegToRad, azimuth[a] * kDegToRad);
-          if (o.keep_gaps && !t.covers(t.coords(wi, wo))) f = 0;
+          const Vec3 wo = frame.direction_above(g.radial[j] * kDegToRad, g.azimuth[a] * kDegToRad);
+          if (keep_gaps && !t.covers(t.coords(wi, wo))) f = 0;
           else t.eval(wi, wo, {&f, 1});
-          v[(a * radial.size() + j) * incidence.size() + i] = f;
+          v[(a * g.radial.size() + j) * g.incidence.size() + i] = f;
         }
     }
-    file.emplace_back(TableParam::specular, BsdfTable::Axes{incidence, {}, radial, azimuth},
-                      std::vector<double>{}, std::move(v), TableReduction{plane, false});
+    file.emplace_back(TableParam::specular, BsdfTable::Axes{g.incidence, {}, g.radial, g.azimuth},
+                      std::vector<double>{}, std::move(v), TableReduction{g.plane, false});
   }
-  // TIS per channel and angle of incidence; an energy check on the luminance channel (Y, or
-  // the monochrome one): above 1 is named in the file and returned.
-  std::vector<std::vector<double>> tis(file.size(), std::vector<double>(incidence.size()));
-  for (std::size_t k = 0; k < file.size(); ++k)
-    for (std::size_t i = 0; i < incidence.size(); ++i)
-      tis[k][i] = table_albedo(file[k], incidence[i])[0];
-  std::vector<std::string> warnings;
-  const auto& lum = tis[o.xyz_weights ? 1 : 0];
-  for (std::size_t i = 0; i < incidence.size(); ++i)
-    if (lum[i] > 1 + 1e-3)
-      warnings.push_back(fmt::format(
-          "directional {} {:.4g} exceeds 1 at AngleOfIncidence {:g}: the table {} more light "
-          "than falls on it", transmission ? "transmittance" : "reflectance", lum[i],
-          incidence[i], transmission ? "transmits" : "reflects"));
+  return file;
+}
 
-  const auto fmt_list = [](const std::vector<double>& v) {
-    std::string s;
-    for (std::size_t i = 0; i < v.size(); ++i) s += (i ? "\t" : "") + text::format_number(v[i]);
-    return s;
-  };
+std::string tab_list(const std::vector<double>& v) {
+  std::string s;
+  for (std::size_t i = 0; i < v.size(); ++i) s += (i ? "\t" : "") + text::format_number(v[i]);
+  return s;
+}
 
-  std::ostream& os = out;
-  std::string comment = o.comment;
-  for (const auto& w : warnings) comment += (comment.empty() ? "" : "\n") + ("warning: " + w);
+// The header, and each channel's block of TIS and values per angle of incidence.
+void write_issa_text(std::ostream& os, const std::vector<BsdfTable>& file,
+                     const std::vector<std::vector<double>>& tis, const IssaGrid& g,
+                     bool transmission, bool xyz, const std::string& comment) {
   if (!comment.empty()) {
     std::istringstream cs(comment);
     for (std::string line; std::getline(cs, line);) os << "# " << line << '\n';
   }
   os << "Source\tMeasured\n"
-     << "Symmetry\t" << (plane ? "PlaneSymmetrical" : "Asymmetrical") << '\n'
-     << "SpectralContent\t" << (o.xyz_weights ? "XYZ" : "Monochrome") << '\n'
+     << "Symmetry\t" << (g.plane ? "PlaneSymmetrical" : "Asymmetrical") << '\n'
+     << "SpectralContent\t" << (xyz ? "XYZ" : "Monochrome") << '\n'
      << "ScatterType\t" << (transmission ? "BTDF" : "BRDF") << '\n'
      << "SampleRotation\t1\n0\n"
-     << "AngleOfIncidence\t" << incidence.size() << '\n' << fmt_list(incidence) << '\n'
-     << "ScatterAzimuth\t" << azimuth.size() << '\n' << fmt_list(azimuth) << '\n'
-     << "ScatterRadial\t" << radial.size() << '\n' << fmt_list(radial) << "\n\n";
+     << "AngleOfIncidence\t" << g.incidence.size() << '\n' << tab_list(g.incidence) << '\n'
+     << "ScatterAzimuth\t" << g.azimuth.size() << '\n' << tab_list(g.azimuth) << '\n'
+     << "ScatterRadial\t" << g.radial.size() << '\n' << tab_list(g.radial) << "\n\n";
   static constexpr const char* kLabels[3] = {"TristimulusX", "TristimulusY", "TristimulusZ"};
   for (std::size_t k = 0; k < file.size(); ++k) {
     const BsdfTable& t = file[k];
-    os << (o.xyz_weights ? kLabels[k] : "Monochrome") << "\nDataBegin\n";
-    for (std::size_t i = 0; i < incidence.size(); ++i) {
+    os << (xyz ? kLabels[k] : "Monochrome") << "\nDataBegin\n";
+    for (std::size_t i = 0; i < g.incidence.size(); ++i) {
       os << "TIS " << fmt::format("{:.6g}", tis[k][i]) << '\n';
       fmt::memory_buffer buf;
-      for (std::size_t a = 0; a < azimuth.size(); ++a) {
-        for (std::size_t j = 0; j < radial.size(); ++j) {
+      for (std::size_t a = 0; a < g.azimuth.size(); ++a) {
+        for (std::size_t j = 0; j < g.radial.size(); ++j) {
           if (j) buf.push_back('\t');
           fmt::format_to(std::back_inserter(buf), "{}", t.at(i, 0, j, a, 0));
         }
@@ -434,6 +435,38 @@ std::vector<std::string> write_issa(std::ostream& out, const BsdfTable& table, b
     }
     os << "DataEnd\n";
   }
+}
+
+}  // namespace
+
+std::vector<std::string> write_issa(std::ostream& out, const BsdfTable& table, bool transmission,
+                                    const IssaWriteOptions& o) {
+  if (table.empty()) throw Error::invalid("table", "is empty");
+  if (!table.isotropic())
+    throw Error(Errc::unsupported,
+                "an IS-SA file holds one sample rotation; an anisotropic table needs .ssdd",
+                "table");
+  const auto channels = output_channels(table, o);
+  const auto g = issa_grid(table, o);
+  const auto file = file_tables(channels, g, o.keep_gaps);
+  // TIS per channel and angle of incidence; an energy check on the luminance channel (Y, or
+  // the monochrome one): above 1 is named in the file and returned.
+  std::vector<std::vector<double>> tis(file.size(), std::vector<double>(g.incidence.size()));
+  for (std::size_t k = 0; k < file.size(); ++k)
+    for (std::size_t i = 0; i < g.incidence.size(); ++i)
+      tis[k][i] = table_albedo(file[k], g.incidence[i])[0];
+  std::vector<std::string> warnings;
+  const auto& lum = tis[o.xyz_weights ? 1 : 0];
+  for (std::size_t i = 0; i < g.incidence.size(); ++i)
+    if (lum[i] > 1 + 1e-3)
+      warnings.push_back(fmt::format(
+          "directional {} {:.4g} exceeds 1 at AngleOfIncidence {:g}: the table {} more light "
+          "than falls on it", transmission ? "transmittance" : "reflectance", lum[i],
+          g.incidence[i], transmission ? "transmits" : "reflects"));
+
+  std::string comment = o.comment;
+  for (const auto& w : warnings) comment += (comment.empty() ? "" : "\n") + ("warning: " + w);
+  write_issa_text(out, file, tis, g, transmission, o.xyz_weights.has_value(), comment);
   if (!out) throw Error(Errc::io_error, "could not write the IS-SA data");
   return warnings;
 }
