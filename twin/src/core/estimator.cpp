@@ -28,14 +28,16 @@ double channel_mean(const std::vector<double>& v) {
 }
 
 // The sample's MIS weight divided by the density of the strategy that drew the candidate
-// (p_this; p1…p3 the densities of all three at it, 0 for one not in use): the balance
-// heuristic 1 / Σp, or the power heuristic (β = 2) p_this / Σp² (Veach 1997, §9.2.2).
+// (p_this; p_aperture, p_bsdf, p_lobe the densities of all three at it, 0 for one not in
+// use): the balance heuristic 1 / Σp, or the power heuristic (β = 2) p_this / Σp² (Veach
+// 1997, §9.2.2).
 // Measured at a fixed budget (variance ratio over 7 geometries per α): with the aperture
 // and the BSDF alone, the power heuristic wins 2.8–5× at the peak of an α = 0.02 lobe, as
 // it keeps the rare aperture draws that land in the lobe from counting; with the narrow-lobe
 // strategy as well, the balance heuristic wins off the peak (up to 5×).
-double mis_over_pdf(double p_this, double p1, double p2, double p3, bool power) {
-  return power ? p_this / (p1 * p1 + p2 * p2 + p3 * p3) : 1.0 / (p1 + p2 + p3);
+double mis_over_pdf(double p_this, double p_aperture, double p_bsdf, double p_lobe, bool power) {
+  return power ? p_this / (p_aperture * p_aperture + p_bsdf * p_bsdf + p_lobe * p_lobe)
+               : 1.0 / (p_aperture + p_bsdf + p_lobe);
 }
 
 // MIS weights divided by the pdf for the reference white, drawn by the aperture and by its
@@ -275,171 +277,212 @@ struct FluxEstimator::Accumulator {
   }
 };
 
+// One replicate's randomised QMC points (run_rqmc): the replicate's constants, and per point
+// the receiver's draw, then each source strategy in turn — uniform over the source aperture,
+// the lobe's shape, BSDF sampling — and the ideal specular paths. The sample's draws are
+// combined by MIS (mis_over_pdf), the reference's by the balance heuristic.
+struct FluxEstimator::RqmcPoint {
+  RqmcPoint(FluxEstimator& est, int r)
+      : e(est), S(est.setup_), src_area(S.source_aperture.tangent_area()),
+        rcv_area(S.receiver_aperture.tangent_area()),
+        sample_plate(Polygon::rectangle(0.5 * S.sample_mm.in_plane, 0.5 * S.sample_mm.perpendicular)),
+        ref_plate(Polygon::rectangle(0.5 * S.reference_mm.in_plane, 0.5 * S.reference_mm.perpendicular)),
+        same_plates(S.sample_mm == S.reference_mm), acc(est, r) {
+    acc.diagnose = r == 0;
+  }
+
+  FluxEstimator& e;
+  const MeasurementSetup& S;
+  const double src_area, rcv_area;
+  const Polygon sample_plate, ref_plate;
+  const bool same_plates;
+  Accumulator acc;
+  // The point: its uniforms, the receiver's direction and the plates' regions it sees.
+  const double* u = nullptr;
+  Vec3 wo, wo_ref;
+  double cos_o = 0, inv_pdf_o = 0;
+  Polygon seen, seen_ref;
+  // The lobe strategy's sampler about ωo's mirror direction, when it serves this point.
+  std::optional<LobeSampler> lobe;
+  // BSDF sampling serves what the lobe strategy does not: a narrow lobe through an elliptical
+  // aperture, or one off the mirror direction. With it in the mix the sample's draws are
+  // weighed by the power heuristic, else by the balance heuristic (see mis_over_pdf).
+  bool bsdf_draws = false;
+
+  // Draws ωo over the receiver's aperture and clips the plates to the receiver's field;
+  // false when ωo is at or below the sample plane.
+  bool receive(const double* uniforms) {
+    u = uniforms;
+    const auto od = direction_from_tangent(S.receiver, aperture_point(S.receiver_aperture, u[0], u[1]));
+    wo = od.w;
+    cos_o = std::abs(wo.z);
+    if (cos_o <= 0) return false;
+    inv_pdf_o = rcv_area * od.cos_gamma3;
+    wo_ref = reference_wo(wo);
+    seen = sample_plate;
+    S.field.clip_to(seen, wo);
+    seen_ref = ref_plate;
+    if (e.reference_) {
+      if (same_plates)
+        seen_ref = seen;
+      else
+        S.field.clip_to(seen_ref, wo);
+    }
+    find_lobe();
+    bsdf_draws = e.sample_narrow_ && !lobe;
+    return true;
+  }
+
+  // Area lit along wi within a seen region; the lit footprint on the sample (diagnostics).
+  double lit_area(const Polygon& region, const Vec3& wi) const {
+    Polygon p = region;
+    S.beam.clip_to(p, wi);
+    return p.area();
+  }
+  double footprint_area(const Vec3& wi) const { return lit_area(sample_plate, wi); }
+
+  double mis(double p_this, double p_aperture, double p_bsdf, double p_lobe) const {
+    return mis_over_pdf(p_this, p_aperture, p_bsdf, p_lobe, bsdf_draws);
+  }
+
+  // One candidate source direction wi with its MIS weight for the sample and reference.
+  void contribute(const Vec3& wi, double w_sample, double w_ref) {
+    const double base = std::abs(wi.z) * cos_o * inv_pdf_o;
+    double a_sample = -1;
+    if (w_sample > 0) {
+      a_sample = seen.n >= 3 ? lit_area(seen, wi) : 0.0;
+      // Seen and lit implies lit: without diagnostics, a draw that is not seen adds nothing.
+      const double lit = acc.diagnose ? footprint_area(wi) : a_sample;
+      if (lit > 0) {
+        e.sample_.eval(wi, wo, acc.f);
+        acc.add_sample(base * w_sample, a_sample, lit, wi, wo, acc.f);
+        if (!e.variants_.empty() && a_sample > 0) acc.add_variants(base * w_sample * a_sample, wi, wo);
+      }
+    }
+    if (e.reference_ && w_ref > 0 && seen_ref.n >= 3) {
+      const double a = !same_plates ? lit_area(seen_ref, wi) : a_sample >= 0 ? a_sample : lit_area(seen, wi);
+      if (a > 0) {
+        e.reference_->eval(wi, wo_ref, acc.fr);
+        acc.add_reference(base * a * w_ref, acc.fr);
+      }
+    }
+  }
+
+  // The lobe strategy, for a lobe narrower than the source aperture: ωi from the lobe's shape
+  // truncated to the aperture about ωo's mirror direction (lobe_sampler.hpp). Every draw lies
+  // in the aperture and moves continuously with its uniforms — no acceptance test, unlike BSDF
+  // sampling — and its density follows the lobe's, so f / p hardly varies. Off the peak, where
+  // the lobe reaches the aperture only at its edge nearest the mirror direction, it puts the
+  // draws there.
+  void find_lobe() {
+    lobe.reset();
+    if (!(e.lobe_scale_.x > 0)) return;
+    Vec2 m;
+    if (!tangent_of(S.source, {-wo.x, -wo.y, wo.z}, m)) return;
+    lobe.emplace(m, e.lobe_scale_, S.source_aperture);
+    if (!lobe->usable()) lobe.reset();
+  }
+  // The lobe strategy's density in solid angle at a direction (0 outside the aperture).
+  double lobe_pdf(const Vec3& wi) const {
+    Vec2 t;
+    if (!lobe || !tangent_of(S.source, wi, t)) return 0.0;
+    const double cg = dot(wi, S.source.a);
+    return lobe->pdf(t) / (cg * cg * cg);
+  }
+
+  // Uniform over the source aperture; when the lobe strategy carries the sample alone, the
+  // draw serves the reference only.
+  void from_aperture() {
+    const auto id = direction_from_tangent(S.source, aperture_point(S.source_aperture, u[4], u[5]));
+    const double p_aperture = 1.0 / (src_area * id.cos_gamma3);
+    const double p_bsdf = bsdf_draws ? e.sample_.pdf(wo, id.w) : 0;
+    const bool alone = lobe && e.lobe_alone_;
+    const double p_lobe = alone ? 0 : lobe_pdf(id.w);
+    const double p_ref_bsdf = e.reference_narrow_ ? e.reference_->pdf(wo_ref, id.w) : 0;
+    contribute(id.w, alone ? 0.0 : mis(p_aperture, p_aperture, p_bsdf, p_lobe),
+               e.reference_narrow_ ? mis_weights(p_aperture, p_ref_bsdf).aperture : 1.0 / p_aperture);
+  }
+
+  void from_lobe() {
+    const auto draw = lobe->sample(u[7], u[6]);
+    const auto id = direction_from_tangent(S.source, draw.t);
+    const double p_aperture = 1.0 / (src_area * id.cos_gamma3);
+    const double p_bsdf = bsdf_draws ? e.sample_.pdf(wo, id.w) : 0;
+    const double p_lobe = draw.pdf / id.cos_gamma3;
+    if (draw.pdf > 0)
+      contribute(id.w, e.lobe_alone_ ? 1.0 / p_lobe : mis(p_lobe, p_aperture, p_bsdf, p_lobe), 0);
+  }
+
+  // BSDF importance sampling given ωo, kept when it lands in the aperture: for the sample or
+  // for the reference.
+  void from_bsdf(const Bsdf& bsdf, const Vec3& wo_b, bool for_sample) {
+    const auto s = bsdf.sample_wi(wo_b, u[6], {u[2], u[3]});
+    if (!s || !(s->pdf > 0)) return;
+    Vec2 t;
+    if (!tangent_of(S.source, s->wi, t) || !S.source_aperture.contains_tangent(t)) return;
+    const double cg = dot(s->wi, S.source.a);
+    const double p_aperture = 1.0 / (src_area * cg * cg * cg);
+    const double w = for_sample ? mis(s->pdf, p_aperture, s->pdf, lobe_pdf(s->wi)) : mis_weights(p_aperture, s->pdf).bsdf;
+    if (w == 0) return;
+    if (for_sample)
+      contribute(s->wi, w, 0);
+    else
+      contribute(s->wi, 0, w);
+  }
+
+  // Ideal specular paths, exactly: the sample's or the reference's.
+  void specular(const Bsdf& bsdf, const Vec3& wo_b, bool for_sample) {
+    bsdf.delta_lobes(wo_b, acc.lobes);
+    for (const auto& l : acc.lobes) {
+      Vec2 t;
+      if (!tangent_of(S.source, l.wi, t) || !S.source_aperture.contains_tangent(t)) continue;
+      const Polygon& region = for_sample ? seen : seen_ref;
+      const double a = region.n >= 3 ? lit_area(region, l.wi) : 0.0;
+      const double w = cos_o * inv_pdf_o;
+      if (for_sample)
+        acc.add_sample(w, a, acc.diagnose ? footprint_area(l.wi) : 0.0, l.wi, wo, l.weight);
+      else if (a > 0)
+        acc.add_reference(w * a, l.weight);
+    }
+  }
+
+  // Each variant's own ideal specular paths (exact, so no sampling to share).
+  void variant_specular() {
+    for (std::size_t v = 0; v < e.variants_.size(); ++v) {
+      if (!e.variants_[v]->has_delta()) continue;
+      e.variants_[v]->delta_lobes(wo, acc.lobes);
+      for (const auto& l : acc.lobes) {
+        Vec2 t;
+        if (!tangent_of(S.source, l.wi, t) || !S.source_aperture.contains_tangent(t)) continue;
+        const double a = seen.n >= 3 ? lit_area(seen, l.wi) : 0.0;
+        const double w = cos_o * inv_pdf_o * a;
+        for (std::size_t c = 0; c < e.channels_; ++c) acc.variant_sum[v][c] += w * l.weight[c];
+      }
+    }
+  }
+};
+
 void FluxEstimator::run_rqmc(int r, std::uint64_t begin, std::uint64_t end) {
   const auto& table = SobolTable::get(end);
   std::uint32_t scramble[kSobolDims];
   for (int d = 0; d < kSobolDims; ++d)
     scramble[d] = static_cast<std::uint32_t>(
         mix64(seed_ ^ mix64(static_cast<std::uint64_t>(r) * 64 + static_cast<std::uint64_t>(d))));
-
-  const auto& S = setup_;
-  const double src_area = S.source_aperture.tangent_area();
-  const double rcv_area = S.receiver_aperture.tangent_area();
-  const Polygon sample_plate = Polygon::rectangle(0.5 * S.sample_mm.in_plane, 0.5 * S.sample_mm.perpendicular);
-  const Polygon ref_plate = Polygon::rectangle(0.5 * S.reference_mm.in_plane, 0.5 * S.reference_mm.perpendicular);
-  const bool same_plates = S.sample_mm == S.reference_mm;
-  Accumulator acc(*this, r);
-  acc.diagnose = r == 0;
+  RqmcPoint p(*this, r);
   const bool sample_delta = sample_.has_delta();
   const bool ref_delta = reference_ && reference_->has_delta();
-
   for (std::uint64_t i = begin; i < end; ++i) {
     double u[kSobolDims];
     for (int d = 0; d < kSobolDims; ++d)
       u[d] = to_unit(owen_scramble(table[i * kSobolDims + static_cast<std::uint64_t>(d)], scramble[d]));
-
-    const auto od = direction_from_tangent(S.receiver, aperture_point(S.receiver_aperture, u[0], u[1]));
-    const Vec3 wo = od.w;
-    const double cos_o = std::abs(wo.z);
-    if (cos_o <= 0) continue;
-    const double inv_pdf_o = rcv_area * od.cos_gamma3;
-    const Vec3 wo_ref = reference_wo(wo);
-
-    Polygon seen = sample_plate;
-    S.field.clip_to(seen, wo);
-    Polygon seen_ref = ref_plate;
-    if (reference_) {
-      if (same_plates)
-        seen_ref = seen;
-      else
-        S.field.clip_to(seen_ref, wo);
-    }
-
-    // Area lit along wi within a seen region; the lit footprint on the sample (diagnostics).
-    const auto lit_area = [&S](const Polygon& region, const Vec3& wi) {
-      Polygon p = region;
-      S.beam.clip_to(p, wi);
-      return p.area();
-    };
-    const auto footprint_area = [&](const Vec3& wi) { return lit_area(sample_plate, wi); };
-
-    // One candidate source direction wi with its MIS weight for the sample and reference.
-    const auto contribute = [&](const Vec3& wi, double w_sample, double w_ref) {
-      const double base = std::abs(wi.z) * cos_o * inv_pdf_o;
-      double a_sample = -1;
-      if (w_sample > 0) {
-        a_sample = seen.n >= 3 ? lit_area(seen, wi) : 0.0;
-        // Seen and lit implies lit: without diagnostics, a draw that is not seen adds nothing.
-        const double lit = acc.diagnose ? footprint_area(wi) : a_sample;
-        if (lit > 0) {
-          sample_.eval(wi, wo, acc.f);
-          acc.add_sample(base * w_sample, a_sample, lit, wi, wo, acc.f);
-          if (!variants_.empty() && a_sample > 0) acc.add_variants(base * w_sample * a_sample, wi, wo);
-        }
-      }
-      if (reference_ && w_ref > 0 && seen_ref.n >= 3) {
-        const double a = !same_plates ? lit_area(seen_ref, wi)
-                         : a_sample >= 0 ? a_sample : lit_area(seen, wi);
-        if (a > 0) {
-          reference_->eval(wi, wo_ref, acc.fr);
-          acc.add_reference(base * a * w_ref, acc.fr);
-        }
-      }
-    };
-
-    // Strategy 3, for a lobe narrower than the source aperture: ωi from the lobe's shape
-    // truncated to the aperture about ωo's mirror direction (lobe_sampler.hpp). Every draw
-    // lies in the aperture and moves continuously with its uniforms — no acceptance test,
-    // unlike BSDF sampling — and its density follows the lobe's, so f / p hardly varies.
-    // Off the peak, where the lobe reaches the aperture only at its edge nearest the mirror
-    // direction, it puts the draws there. pdf3_of: its density in solid angle at a
-    // direction (0 outside the aperture).
-    std::optional<LobeSampler> lobe_draw;
-    if (lobe_scale_.x > 0) {
-      Vec2 m;
-      if (tangent_of(S.source, {-wo.x, -wo.y, wo.z}, m)) {
-        lobe_draw.emplace(m, lobe_scale_, S.source_aperture);
-        if (!lobe_draw->usable()) lobe_draw.reset();
-      }
-    }
-    const auto pdf3_of = [&](const Vec3& wi) {
-      Vec2 t;
-      if (!lobe_draw || !tangent_of(S.source, wi, t)) return 0.0;
-      const double cg = dot(wi, S.source.a);
-      return lobe_draw->pdf(t) / (cg * cg * cg);
-    };
-    // BSDF sampling serves what the lobe strategy does not: a narrow lobe through an
-    // elliptical aperture, or one off the mirror direction.
-    const bool mis_b = sample_narrow_ && !lobe_draw;
-    const bool power = sample_narrow_ && !lobe_draw;
-    // Strategy 1: uniform over the source aperture.
-    {
-      const auto id = direction_from_tangent(S.source, aperture_point(S.source_aperture, u[4], u[5]));
-      const double pdf1 = 1.0 / (src_area * id.cos_gamma3);
-      const double pdf2 = mis_b ? sample_.pdf(wo, id.w) : 0;
-      const bool alone = lobe_draw && lobe_alone_;  // the draw serves the reference only
-      const double pdf3 = alone ? 0 : pdf3_of(id.w);
-      const double pdf2r = reference_narrow_ ? reference_->pdf(wo_ref, id.w) : 0;
-      contribute(id.w, alone ? 0.0 : mis_over_pdf(pdf1, pdf1, pdf2, pdf3, power),
-                 reference_narrow_ ? mis_weights(pdf1, pdf2r).aperture : 1.0 / pdf1);
-    }
-    if (lobe_draw) {
-      const auto draw = lobe_draw->sample(u[7], u[6]);
-      const auto id = direction_from_tangent(S.source, draw.t);
-      const double pdf1 = 1.0 / (src_area * id.cos_gamma3);
-      const double pdf2 = mis_b ? sample_.pdf(wo, id.w) : 0;
-      const double pdf3 = draw.pdf / id.cos_gamma3;
-      if (draw.pdf > 0)
-        contribute(id.w, lobe_alone_ ? 1.0 / pdf3 : mis_over_pdf(pdf3, pdf1, pdf2, pdf3, power), 0);
-    }
-    // Strategy 2: BSDF importance sampling given wo, kept when it lands in the aperture.
-    const auto bsdf_strategy = [&](const Bsdf& bsdf, const Vec3& wo_b, bool for_sample) {
-      const auto s = bsdf.sample_wi(wo_b, u[6], {u[2], u[3]});
-      if (!s || !(s->pdf > 0)) return;
-      Vec2 t;
-      if (!tangent_of(S.source, s->wi, t) || !S.source_aperture.contains_tangent(t)) return;
-      const double cg = dot(s->wi, S.source.a);
-      const double pdf1 = 1.0 / (src_area * cg * cg * cg);
-      const double w = for_sample ? mis_over_pdf(s->pdf, pdf1, s->pdf, pdf3_of(s->wi), power)
-                                  : mis_weights(pdf1, s->pdf).bsdf;
-      if (w == 0) return;
-      if (for_sample)
-        contribute(s->wi, w, 0);
-      else
-        contribute(s->wi, 0, w);
-    };
-    if (mis_b) bsdf_strategy(sample_, wo, true);
-    if (reference_narrow_) bsdf_strategy(*reference_, wo_ref, false);
-
-    // Ideal specular paths, exactly.
-    const auto delta = [&](const Bsdf& bsdf, const Vec3& wo_b, bool for_sample) {
-      bsdf.delta_lobes(wo_b, acc.lobes);
-      for (const auto& lobe : acc.lobes) {
-        Vec2 t;
-        if (!tangent_of(S.source, lobe.wi, t) || !S.source_aperture.contains_tangent(t)) continue;
-        const Polygon& region = for_sample ? seen : seen_ref;
-        const double a = region.n >= 3 ? lit_area(region, lobe.wi) : 0.0;
-        const double w = cos_o * inv_pdf_o;
-        if (for_sample)
-          acc.add_sample(w, a, acc.diagnose ? footprint_area(lobe.wi) : 0.0, lobe.wi, wo, lobe.weight);
-        else if (a > 0)
-          acc.add_reference(w * a, lobe.weight);
-      }
-    };
-    if (sample_delta) delta(sample_, wo, true);
-    if (ref_delta) delta(*reference_, wo_ref, false);
-    // Each variant's own ideal specular paths (exact, so no sampling to share).
-    for (std::size_t v = 0; v < variants_.size(); ++v) {
-      if (!variants_[v]->has_delta()) continue;
-      variants_[v]->delta_lobes(wo, acc.lobes);
-      for (const auto& lobe : acc.lobes) {
-        Vec2 t;
-        if (!tangent_of(S.source, lobe.wi, t) || !S.source_aperture.contains_tangent(t)) continue;
-        const double a = seen.n >= 3 ? lit_area(seen, lobe.wi) : 0.0;
-        const double w = cos_o * inv_pdf_o * a;
-        for (std::size_t c = 0; c < channels_; ++c) acc.variant_sum[v][c] += w * lobe.weight[c];
-      }
-    }
+    if (!p.receive(u)) continue;
+    p.from_aperture();
+    if (p.lobe) p.from_lobe();
+    if (p.bsdf_draws) p.from_bsdf(sample_, p.wo, true);
+    if (reference_narrow_) p.from_bsdf(*reference_, p.wo_ref, false);
+    if (sample_delta) p.specular(sample_, p.wo, true);
+    if (ref_delta) p.specular(*reference_, p.wo_ref, false);
+    p.variant_specular();
   }
 }
 

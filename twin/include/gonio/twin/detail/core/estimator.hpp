@@ -83,6 +83,7 @@ class FluxEstimator {
 
  private:
   struct Accumulator;
+  struct RqmcPoint;
   static bool narrow_at_aperture_scale(const MeasurementSetup& s, const Bsdf& bsdf, bool reference);
   void run_rqmc(int r, std::uint64_t begin, std::uint64_t end);
   void run_baseline(int r, std::uint64_t begin, std::uint64_t end);
