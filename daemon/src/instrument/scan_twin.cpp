@@ -119,9 +119,7 @@ ScanTwin::PointPrediction ScanTwin::predict(const Geometry& g, const twin::Estim
 std::vector<BudgetEntry> budget_entries(const twin::Budget& b) {
   std::vector<BudgetEntry> out;
   for (const auto& c : b.components) {
-    const char* dist = c.distribution == twin::Distribution::rectangular  ? "rectangular"
-                       : c.distribution == twin::Distribution::triangular ? "triangular"
-                                                                          : "normal";
+    const std::string dist(to_text(c.distribution));
     const bool curved = !c.random && std::any_of(c.curvature.begin(), c.curvature.end(), [](double v) { return v != 0; });
     out.push_back(BudgetEntry{c.name, dist, c.unit, c.random, rounded(c.u), rounded(c.sensitivity),
                               rounded(c.contribution), curved ? rounded(c.curvature) : std::vector<double>{},

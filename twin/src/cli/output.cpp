@@ -89,9 +89,7 @@ void write_budget_table(std::ostream& out, const std::vector<Prediction>& ps,
     fmt::print(out, "  {:<24} {:<12} {:>11} {:>6} {:>13} {:>12} {:>8}  {}\n", "input quantity",
                "distribution", "u(x)", "unit", "c = ∂β/∂x", "u_x(β)", "rel", "");
     for (const auto& c : b.components) {
-      const char* dist = c.distribution == Distribution::rectangular  ? "rectangular"
-                         : c.distribution == Distribution::triangular ? "triangular"
-                                                                      : "normal";
+      const auto dist = to_text(c.distribution);
       fmt::print(out, "  {:<24} {:<12} {:>11.4g} {:>6} {:>13.4g} {:>12.4g} {:>7.3f}%  {}\n", c.name,
                  dist, c.u[k], c.unit, c.sensitivity[k], c.contribution[k], rel(c.contribution[k]),
                  c.random ? "random" : "systematic");

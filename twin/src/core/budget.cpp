@@ -193,7 +193,7 @@ void to_json(nlohmann::json& j, const BudgetComponent& c) {
   const bool uniform =
       std::all_of(c.u.begin(), c.u.end(), [&](double v) { return c.u.empty() || v == c.u.front(); });
   j = nlohmann::json{{"component", c.name},
-                     {"distribution", distribution_text(c.distribution)},
+                     {"distribution", to_text(c.distribution)},
                      {"unit", c.unit},
                      {"random", c.random},
                      {"u", uniform ? nlohmann::json(c.u.empty() ? 0.0 : c.u.front()) : nlohmann::json(c.u)},

@@ -75,7 +75,7 @@ void check(double v, const std::string& field, double lo, double hi, std::string
 }
 
 nlohmann::json tolerance_json(const Tolerance& t) {
-  nlohmann::json j{{"distribution", distribution_text(t.distribution)}};
+  nlohmann::json j{{"distribution", to_text(t.distribution)}};
   if (t.distribution != Distribution::normal) {
     j["half_width"] = t.half_width;
   } else if (!t.spectral.empty()) {
@@ -99,12 +99,8 @@ Tolerance read_tolerance(const nlohmann::json& j, const std::string& field, doub
                          "its distribution has no standard uncertainty");
   Tolerance t;
   const auto d = r.required<std::string>("distribution");
-  if (d == "rectangular")
-    t.distribution = Distribution::rectangular;
-  else if (d == "triangular")
-    t.distribution = Distribution::triangular;
-  else if (d == "normal")
-    t.distribution = Distribution::normal;
+  if (const auto named = from_text<Distribution>(d))
+    t.distribution = *named;
   else
     throw Error::invalid(r.path("distribution"),
                          fmt::format("'{}' (allowed: rectangular, triangular, normal)", d));
@@ -154,15 +150,6 @@ constexpr ToleranceKey kToleranceKeys[] = {
 };
 
 }  // namespace
-
-const char* distribution_text(Distribution d) noexcept {
-  switch (d) {
-    case Distribution::rectangular: return "rectangular";
-    case Distribution::triangular: return "triangular";
-    case Distribution::normal: return "normal";
-  }
-  return "normal";
-}
 
 double Tolerance::standard_uncertainty(double wavelength_nm) const {
   switch (distribution) {

@@ -267,7 +267,7 @@ bool CurveDesign::target_reached() const { return max_error_ <= options_.toleran
 
 DesignStatus CurveDesign::status() const {
   DesignStatus s;
-  s.mode = "curve";
+  s.mode = AdaptiveMode::curve;
   s.state = target_reached() ? DesignState::target_reached : DesignState::running;
   s.points_used = measured_.size();
   if (max_error_ < kUnknown) s.estimated_error = max_error_;

@@ -38,18 +38,9 @@ double ScanTiming::total_s(const Geometry& start, const std::vector<Geometry>& s
   return t;
 }
 
-std::string_view to_text(DesignState s) {
-  switch (s) {
-    case DesignState::running: return "running";
-    case DesignState::target_reached: return "target_reached";
-    case DesignState::max_points: return "max_points";
-  }
-  return "running";
-}
-
 nlohmann::json DesignStatus::to_json() const {
-  nlohmann::json j{{"mode", mode}, {"state", to_text(state)}, {"points_used", points_used}};
-  if (mode == "parameters") {
+  nlohmann::json j{{"mode", to_text(mode)}, {"state", to_text(state)}, {"points_used", points_used}};
+  if (mode == AdaptiveMode::parameters) {
     auto ps = nlohmann::json::array();
     for (const auto& p : parameters) ps.push_back({{"name", p.name}, {"value", p.value}, {"u", p.u}});
     j["parameters"] = std::move(ps);

@@ -239,7 +239,7 @@ bool ParameterDesign::target_reached() const {
 
 DesignStatus ParameterDesign::status() const {
   DesignStatus s;
-  s.mode = "parameters";
+  s.mode = AdaptiveMode::parameters;
   s.state = target_reached() ? DesignState::target_reached : DesignState::running;
   s.points_used = measured_.size();
   if (fit_) {

@@ -120,7 +120,7 @@ DesignStudy study_design(const std::string& model, const std::vector<Geometry>& 
   const auto& timing = parameters ? options.parameters.timing : options.curve.timing;
   for (std::size_t c = 0; c < candidates.size(); ++c) out.uniform.chosen.push_back(c);
   out.uniform.seconds = timing.total_s(candidates.front(), candidates);
-  out.uniform.status.mode = parameters ? "parameters" : "curve";
+  out.uniform.status.mode = parameters ? AdaptiveMode::parameters : AdaptiveMode::curve;
   out.uniform.status.points_used = candidates.size();
   out.uniform.status.state = DesignState::max_points;
 

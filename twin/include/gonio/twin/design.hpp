@@ -34,6 +34,7 @@
 
 #include "gonio/proto/arms.hpp"
 #include "gonio/proto/geometry.hpp"
+#include "gonio/proto/scan.hpp"
 #include "gonio/proto/spectrum.hpp"
 #include "gonio/twin/fit.hpp"
 #include "gonio/twin/instrument.hpp"
@@ -72,7 +73,12 @@ struct ArmReach {
 };
 
 enum class DesignState { running, target_reached, max_points };
-std::string_view to_text(DesignState s);
+inline constexpr EnumNames<DesignState, 3> kDesignStateNames{{
+    {DesignState::running, "running"},
+    {DesignState::target_reached, "target_reached"},
+    {DesignState::max_points, "max_points"},
+}};
+constexpr const auto& enum_names(DesignState) { return kDesignStateNames; }  // proto/enum_text.hpp
 
 struct EstimatedParameter {
   std::string name;
@@ -82,7 +88,7 @@ struct EstimatedParameter {
 
 // What an adaptive scan shows (scan.get's `adaptive`).
 struct DesignStatus {
-  std::string mode;  // "parameters" or "curve"
+  AdaptiveMode mode = AdaptiveMode::parameters;
   DesignState state = DesignState::running;
   std::size_t points_used = 0;
   std::vector<EstimatedParameter> parameters;  // parameters mode, after the first fit

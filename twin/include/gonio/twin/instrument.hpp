@@ -26,6 +26,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "gonio/proto/enum_text.hpp"
 #include "gonio/proto/geometry.hpp"
 
 namespace gonio::twin {
@@ -45,9 +46,14 @@ struct Extent {
 
 // How a stated tolerance is distributed (GUM, JCGM 100:2008 §4.3.7–4.3.9): a data sheet's
 // "±a" is rectangular unless it says otherwise; a calibration certificate's u is normal.
+// Named as the profile and the budget spell it (proto/enum_text.hpp).
 enum class Distribution { rectangular, triangular, normal };
-// "rectangular", "triangular", "normal": the profile's and the budget's spelling.
-const char* distribution_text(Distribution d) noexcept;
+inline constexpr EnumNames<Distribution, 3> kDistributionNames{{
+    {Distribution::rectangular, "rectangular"},
+    {Distribution::triangular, "triangular"},
+    {Distribution::normal, "normal"},
+}};
+constexpr const auto& enum_names(Distribution) { return kDistributionNames; }
 
 // One stated tolerance: ±half_width (rectangular, triangular) or a standard uncertainty u
 // (normal, k = 1). `spectral` (normal only) gives u per wavelength instead, as nm:u nodes
