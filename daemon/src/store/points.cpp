@@ -19,7 +19,11 @@ void Store::insert_point(const PointRecord& p, const std::string& data) {
                 "VALUES (?, ?, ?, ?, ?, ?)",
                 p.scan_id, p.index, p.geometry_index, p.diverged, p.finished_at, data);
   } catch (const Error& e) {
-    if (e.code() == Errc::invalid_state)
+    // A constraint failed: the index taken is a point stored twice; any other is not.
+    if (e.code() == Errc::invalid_state &&
+        !db::query(*writer_, "SELECT 1 FROM points WHERE scan_id = ? AND idx = ?",
+                   [](const db::Stmt&) { return true; }, p.scan_id, p.index)
+             .empty())
       throw Error::exists("index", fmt::format("point {} of scan {}", p.index, p.scan_id));
     throw;
   }

@@ -60,7 +60,7 @@ struct AlertDraft {
   std::string kind;
   Severity severity = Severity::warning;
   std::string dedup_key;
-  std::optional<std::int64_t> scan_id, sample_id, point_index;
+  std::optional<std::int64_t> scan_id{}, sample_id{}, point_index{};
   std::string message;
 };
 
