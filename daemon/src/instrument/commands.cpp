@@ -10,7 +10,7 @@
 #include "gonio/daemon/instrument/instrument.hpp"
 #include "gonio/daemon/instrument/plan_check.hpp"
 #include "gonio/proto/error.hpp"
-#include "instrument/run.hpp"
+#include "instrument/scan_run.hpp"
 
 namespace gonio::daemon {
 
@@ -188,15 +188,7 @@ json Instrument::home(std::vector<Axis> axes, const std::string& actor) {
                                                     }()}});
     set_state("homing");
     try {
-      for (Axis a : axes) {
-        beat();
-        motion_->home(a, config_.home_timeout);
-        beat();
-        const double pos = motion_->position(a, config_.move_timeout);
-        std::lock_guard lock(mu_);
-        positions_[a] = pos;
-        std::erase(unhomed_, a);
-      }
+      arms_.home(*motion_, positions(), axes);
     } catch (const Error& e) {
       if (is_link_error(e.code())) drop_device(Side::motion, e);
       settle_state(e.what());
@@ -236,7 +228,7 @@ json Instrument::move(const std::map<Axis, double>& targets, const std::string& 
     set_state("moving");
     try {
       if (targets.contains(Axis::incidence) || targets.contains(Axis::receive))
-        move_arms(ti, tr, std::nullopt);
+        arms_.move(*motion_, positions(), ti, tr, std::nullopt);
       for (const auto& [axis, deg] : targets) {
         if (axis == Axis::incidence || axis == Axis::receive) continue;
         beat();

@@ -15,7 +15,7 @@
 #include "gonio/proto/json_writer.hpp"
 #include "gonio/proto/text.hpp"
 #include "gonio/registry/registry.hpp"
-#include "instrument/run.hpp"
+#include "instrument/scan_run.hpp"
 
 namespace gonio::daemon {
 
@@ -46,8 +46,6 @@ bool is_config_error(const Error& e, const Config& c) {
 
 }  // namespace
 
-// Instrument::Run is declared in run.hpp.
-
 Instrument::Instrument(const Config& config, Store& store, TwinService& twin, AlertService& alerts,
                        Hub& hub)
     : config_(config), store_(store), twin_(twin), alerts_(alerts), hub_(hub),
@@ -60,7 +58,20 @@ Instrument::Instrument(const Config& config, Store& store, TwinService& twin, Al
           throw Error(e.code(), fmt::format("instrument.{}", e.what()),
                       join_field("instrument", e.field()));
         }
-      }()) {
+      }()),
+      storage_(store, alerts),
+      ranger_(AutoRanger::Settings{.enabled = config.autorange,
+                                   .integration_ms = config.integration_ms,
+                                   .limits = RangeLimits{config.integration_min_ms, config.integration_max_ms,
+                                                         config.underexposed_snr},
+                                   .timeout = config.measure_timeout},
+              [this] { beat(); }),
+      arms_(guard_, ArmMover::Timeouts{.move = config.move_timeout, .home = config.home_timeout}, [this] { beat(); },
+            [this](const ArmStep& s, double deg) {
+              std::lock_guard lock(mu_);
+              positions_[s.axis] = deg;
+              if (s.kind == ArmStep::Kind::home) std::erase(unhomed_, s.axis);
+            }) {
   divergence_ = DivergenceSettings{.coverage_k = config.coverage_k,
                                    .z_threshold = config.z_threshold,
                                    .delta_e_threshold = config.delta_e_threshold,
@@ -188,7 +199,7 @@ void Instrument::open_side(Side s, bool at_start) {
         spdlog::error("instrument: {}", fault_reason_);
       }
       old = std::exchange(photometer_, std::move(p));
-      integration_set_.reset();  // a device opened again may have any setting
+      ranger_.reopened();  // a device opened again may have any setting
       photometer_grid_ = grid;
       photometer_identity_ = identity;
     }
@@ -306,6 +317,11 @@ void Instrument::settle_state(std::string detail) {
 
 void Instrument::publish_state() { hub_.publish(Topic::state, "instrument.state", status()); }
 
+AxisPositions Instrument::positions() const {
+  std::lock_guard lock(mu_);
+  return positions_;
+}
+
 json Instrument::positions_json() const {
   json p = json::object();
   for (const auto& [axis, deg] : positions_) p[std::string(to_text(axis))] = deg;
@@ -342,7 +358,7 @@ json Instrument::status() const {
                   {"receive", {config_.limits.receive_min, config_.limits.receive_max}},
                   {"min_separation", guard_.min_separation_deg()}}},
       {"profile", twin_.profile_info()},
-      {"storage", storage_json()},
+      {"storage", storage_.to_json()},
   };
 }
 
@@ -420,70 +436,16 @@ void Instrument::loop() {
       continue;
     }
     if (run_) {
-      if (control_ != Control::none) {
-        const auto c = control_;
-        const auto reason = control_reason_, actor = control_actor_;
-        control_ = Control::none;
-        lock.unlock();
-        std::lock_guard sched(sched_mu_);
-        finish_run(c == Control::pause ? ScanState::paused : ScanState::cancelled, reason, actor);
-        continue;
-      }
       lock.unlock();
-      check_storage();
-      try {
-        step();
-      } catch (const std::exception& e) {
-        // A bug, not a device: fail the scan rather than the daemon.
-        std::int64_t id = 0;
-        {
-          std::lock_guard l2(mu_);
-          id = run_ ? run_->scan.id : 0;
-        }
-        spdlog::error("scan {}: internal error: {}", id, e.what());
-        alerts_.raise(AlertDraft{std::string(alert_kind::scan_failed), Severity::critical,
-                                 fmt::format("scan_failed:scan:{}", id), id, std::nullopt,
-                                 std::nullopt, fmt::format("scan {} failed: {}", id, e.what())});
-        std::lock_guard sched(sched_mu_);
-        finish_run(ScanState::failed, fmt::format("internal error: {}", e.what()), "goniod");
-      }
-      continue;
-    }
-    if (auto_resume_ && Clock::now() >= auto_resume_->second) {
-      const auto id = auto_resume_->first;
-      auto_resume_.reset();
-      lock.unlock();
-      try {
-        resume(id, "goniod (auto-resume)");
-        spdlog::info("scan {}: resumed automatically after a device fault", id);
-      } catch (const Error& e) {
-        spdlog::warn("scan {}: auto-resume failed: {}", id, e.what());
-      }
+      run_turn();
       continue;
     }
     auto wait_until = Clock::now() + std::chrono::seconds(1);
     if (auto_resume_) wait_until = std::min(wait_until, auto_resume_->second);
     lock.unlock();
-    check_storage();
+    if (start_next()) continue;
     lock.lock();
     if (stopping_ || !commands_.empty()) continue;
-    // No scan starts on a store that cannot write or is low on space.
-    if (!fault_latched_ && unhomed_.empty() && store_.writable() && !low_space_) {
-      lock.unlock();
-      std::optional<Scan> next;
-      {
-        std::lock_guard sched(sched_mu_);
-        try {
-          next = store_.next_runnable(utc::now());
-          if (next) start_run(*next);
-        } catch (const Error& e) {
-          spdlog::error("scheduler: {}", e.what());
-        }
-      }
-      if (next) continue;
-      lock.lock();
-      if (stopping_ || !commands_.empty()) continue;
-    }
     cv_.wait_until(lock, wait_until);
   }
   // Park: the point in progress has been committed (step() returns only after that).
@@ -494,10 +456,8 @@ void Instrument::loop() {
   }
   if (parked) {
     std::lock_guard sched(sched_mu_);
-    const auto next = run_->next;
     finish_run(ScanState::interrupted,
-               fmt::format("goniod stopped; resumes at point {} of {}", next,
-                           run_->scan.points_total),
+               fmt::format("goniod stopped; resumes at point {} of {}", run_->next(), run_->scan().points_total),
                "goniod");
   }
   std::deque<std::shared_ptr<Command>> pending;
@@ -507,6 +467,73 @@ void Instrument::loop() {
   }
   for (auto& c : pending)
     c->done.set_exception(std::make_exception_ptr(Error::wrong_state("", "goniod is stopping")));
+}
+
+void Instrument::run_turn() {
+  {
+    std::unique_lock lock(mu_);
+    if (control_ != Control::none) {
+      const auto c = control_;
+      const auto reason = control_reason_, actor = control_actor_;
+      control_ = Control::none;
+      lock.unlock();
+      std::lock_guard sched(sched_mu_);
+      finish_run(c == Control::pause ? ScanState::paused : ScanState::cancelled, reason, actor);
+      return;
+    }
+  }
+  check_storage();
+  try {
+    step();
+  } catch (const std::exception& e) {
+    // Not a fault of the devices or the store (those are PointFaults): a defect. The scan
+    // fails rather than the daemon.
+    const auto id = run_ ? run_->id() : 0;
+    spdlog::error("scan {}: internal error: {}", id, e.what());
+    alerts_.raise(AlertDraft{.kind = std::string(alert_kind::scan_failed),
+                             .severity = Severity::critical,
+                             .dedup_key = fmt::format("scan_failed:scan:{}", id),
+                             .scan_id = id,
+                             .message = fmt::format("scan {} failed: {}", id, e.what())});
+    std::lock_guard sched(sched_mu_);
+    finish_run(ScanState::failed, fmt::format("internal error: {}", e.what()), "goniod");
+  }
+}
+
+bool Instrument::start_next() {
+  std::optional<std::int64_t> resume_id;
+  {
+    std::lock_guard lock(mu_);
+    if (auto_resume_ && Clock::now() >= auto_resume_->second) {
+      resume_id = auto_resume_->first;
+      auto_resume_.reset();
+    }
+  }
+  if (resume_id) {
+    try {
+      resume(*resume_id, "goniod (auto-resume)");
+      spdlog::info("scan {}: resumed automatically after a device fault", *resume_id);
+    } catch (const Error& e) {
+      spdlog::warn("scan {}: auto-resume failed: {}", *resume_id, e.what());
+    }
+    return true;
+  }
+  check_storage();
+  {
+    std::lock_guard lock(mu_);
+    if (stopping_ || !commands_.empty()) return true;
+    // No scan starts on a store that cannot write or is low on space.
+    if (fault_latched_ || !unhomed_.empty() || !store_.writable() || storage_.low_space()) return false;
+  }
+  std::lock_guard sched(sched_mu_);
+  std::optional<Scan> next;
+  try {
+    next = store_.next_runnable(utc::now());
+    if (next) start_run(*next);
+  } catch (const Error& e) {
+    spdlog::error("scheduler: {}", e.what());
+  }
+  return next.has_value();
 }
 
 }  // namespace gonio::daemon

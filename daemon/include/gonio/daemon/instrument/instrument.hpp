@@ -31,10 +31,15 @@
 // words the reason once, stores it and publishes the stored record, so that scan.state
 // notifications always say what scan.get says.
 //
-// The class is implemented in three files: instrument.cpp (thread, loop, devices, status),
-// instrument/run.cpp (one run: start, points, finish, device faults) and
-// instrument/commands.cpp (pause/resume/cancel, plan checks and the manual commands). The
-// arithmetic of a point is in point_reduction.hpp, the plan rules in plan_check.hpp.
+// The instrument is cut by concern: instrument.cpp (thread, loop, devices, status),
+// instrument/run.cpp (starting and finishing a run, one point's steps in order and the one
+// fault rule for them, device and storage faults), instrument/commands.cpp (pause, resume,
+// cancel, the state transition, plan checks and the manual commands). Its parts have their
+// own types: ScanRun (scan_run.hpp: a run's state and the point steps of
+// docs/architecture.md §6), StorageWatch (storage_watch.hpp), AutoRanger (auto_ranger.hpp:
+// the ranging loop; autorange.hpp the rule) and ArmMover (arm_moves.hpp: the order of arm
+// moves and of homing). The arithmetic of a point is in point_reduction.hpp, the plan rules
+// in plan_check.hpp.
 #pragma once
 
 #include <atomic>
@@ -55,8 +60,11 @@
 
 #include "gonio/daemon/config/config.hpp"
 #include "gonio/daemon/instrument/alerts.hpp"
+#include "gonio/daemon/instrument/arm_moves.hpp"
+#include "gonio/daemon/instrument/auto_ranger.hpp"
 #include "gonio/daemon/instrument/divergence.hpp"
 #include "gonio/daemon/instrument/plan_check.hpp"
+#include "gonio/daemon/instrument/storage_watch.hpp"
 #include "gonio/daemon/instrument/twin_service.hpp"
 #include "gonio/daemon/rpc/hub.hpp"
 #include "gonio/daemon/store/store.hpp"
@@ -71,6 +79,10 @@ class InstrumentOpener;
 
 namespace gonio::daemon {
 
+class ScanRun;
+class PointFault;
+struct RunContext;
+
 class Instrument {
  public:
   Instrument(const Config& config, Store& store, TwinService& twin, AlertService& alerts, Hub& hub);
@@ -81,7 +93,7 @@ class Instrument {
   void start();
   // The scans a crash left running could not be marked interrupted (the store cannot
   // write): done with `reason` once it can. Call before start().
-  void recover_when_writable(std::string reason) { recover_reason_ = std::move(reason); }
+  void recover_when_writable(std::string reason) { storage_.recover_when_writable(std::move(reason)); }
   // Finishes the point in progress, parks the running scan as `interrupted` and joins the
   // thread. Idempotent.
   void shutdown();
@@ -124,7 +136,6 @@ class Instrument {
   }
 
  private:
-  struct Run;
   struct Command {
     std::function<nlohmann::json()> fn;
     std::promise<nlohmann::json> done;
@@ -154,22 +165,17 @@ class Instrument {
   nlohmann::json link_json(Side s) const;  // under mu_
   Error devices_down() const;              // under mu_: which device is missing, and why
   void start_run(const Scan& scan);
-  // One point of the current run: docs/architecture.md §6 steps 3–7, one function each
-  // (instrument/run.cpp). A step that returns nullopt or false has handled its fault.
-  struct PointReadings;
+  // One point of the current run: docs/architecture.md §6 steps 3–8, ScanRun's steps in
+  // order. A step's PointFault is acted on here, by the one rule of §6 (on_point_fault).
   void step();
-  std::optional<PointReadings> read_point(const Geometry& g, PointRecord& p);     // 3
-  bool reduce(const PointReadings& in, PointRecord& p);                            // 4
-  double predict_and_judge(std::size_t geometry, PointRecord& p);                  // 5
-  bool commit_point(const PointRecord& p, const std::string& text);                // 6
-  void publish_point(const PointRecord& p, const std::string& text, std::size_t geometry);  // 7
+  void on_point_fault(const PointFault& f);
   void finish_run(ScanState state, const std::string& reason, const std::string& actor);
+  // The stored scan; throws Error::not_found("scan", ...).
+  Scan stored_scan(std::int64_t id) const;
   // The one place a scan changes state: words the reason (an empty `reason` becomes "paused
   // by <actor>", "cancelled by <actor>" or "resumed by <actor>" for those states), stores it
   // and publishes scan.state with the stored state and reason. Returns the stored scan.
   // Callers hold sched_mu_.
-  // The stored scan; throws Error::not_found("scan", ...).
-  Scan stored_scan(std::int64_t id) const;
   Scan transition(std::int64_t id, ScanState to, const std::string& reason,
                   const std::string& actor);
   // A scan that has ended (completed, failed, cancelled): its standing sustained divergence
@@ -178,14 +184,13 @@ class Instrument {
   void resolve_unsupported_alerts(std::int64_t scan);
   DeviceFacts device_facts() const;  // for check_plan
   void on_device_fault(const Error& e);
-  // The store cannot write (Error(storage_unavailable)): the scan pauses with a critical
-  // `storage` alert, written from the store's reserve or held in memory (storage.hpp).
+  // The store did not take the point (Error(storage_unavailable): it cannot write): the
+  // scan pauses with a critical `storage` alert, written from the store's reserve or held in
+  // memory (storage.hpp).
   void on_storage_fault(const Error& e);
-  // At most once a second, from the loop: the low-space warning, a read-only store's probe,
-  // and what waited for the store to write again (held alerts, a scan state, the recovery
-  // of the scans a crash left running). Runner thread.
+  // From the loop (StorageWatch::poll, at most once a second): the low-space warning, a
+  // read-only store's probe, and what waited for the store to write again. Runner thread.
   void check_storage();
-  nlohmann::json storage_json() const;
   // The fault latch outlives the process: at start it is rebuilt from the unacknowledged
   // device_fault alerts, and a technician's resume or reset acknowledges them.
   void restore_fault_latch();
@@ -195,17 +200,17 @@ class Instrument {
   void set_state(std::string state, std::string detail = {});
   void settle_state(std::string detail = {});  // "fault" while latched, else "idle"
   void publish_state();
-  void move_arms(double incidence, double receive, std::optional<double> rotation);
   void beat();
+  AxisPositions positions() const;  // a copy, under mu_
   nlohmann::json positions_json() const;
-  void publish_progress();
-  // The scan's verdict from every point so far: stored when it changes, the sustained
-  // divergence alert raised or updated, a calibration hint at the end (`final`).
-  void judge_scan(std::int64_t point_index, bool final);
-  // Completes the running scan; an adaptive one stores its loop's final state and says in
-  // the reason why it stopped (`at_max_points`: it used every point allowed).
-  void finish_adaptive_or_complete(bool at_max_points);
-  nlohmann::json adaptive_json() const;
+  // Runs one turn of the loop with a run in place (a requested pause or cancel, else a
+  // point). Called without mu_.
+  void run_turn();
+  // No run: a due auto-resume or the next runnable scan. Whether one was started.
+  bool start_next();
+  // After a turn's point: complete the run, or carry out the pause the verdict asks for.
+  void after_point(const std::optional<std::string>& pause);
+  RunContext run_context();
 
   const Config& config_;
   Store& store_;
@@ -229,7 +234,7 @@ class Instrument {
   bool stopping_ = false;
   bool started_ = false;
   std::deque<std::shared_ptr<Command>> commands_;
-  std::unique_ptr<Run> run_;
+  std::unique_ptr<ScanRun> run_;
   std::optional<std::int64_t> running_;
   enum class Control { none, pause, cancel };
   std::optional<Scan> control_running(std::int64_t id, Control what, const std::string& reason,
@@ -240,22 +245,9 @@ class Instrument {
   std::string fault_reason_;
   std::optional<std::pair<std::int64_t, std::chrono::steady_clock::time_point>> auto_resume_;
   std::map<std::int64_t, int> auto_resumes_;
-  // Auto-ranging (runner thread): the nominal integration time once known, and the setting
-  // last given to the photometer (reset when the photometer is opened again).
-  std::optional<double> nominal_integration_;
-  // Storage (runner thread, except storage_json()).
-  std::chrono::steady_clock::time_point storage_checked_{};
-  bool low_space_ = false;
-  struct UnsavedState {
-    std::int64_t scan = 0;
-    ScanState state = ScanState::paused;
-    std::string reason, actor;
-  };
-  std::optional<UnsavedState> unsaved_state_;  // guarded by sched_mu_
-  std::optional<std::string> recover_reason_;   // guarded by sched_mu_
-  std::optional<double> integration_set_;
-  double nominal_integration_ms();  // 0: no ranging
-  void set_integration(double ms);
+  StorageWatch storage_;  // runner thread
+  AutoRanger ranger_;     // runner thread
+  ArmMover arms_;         // runner thread
   std::string state_ = "starting", state_detail_;
   std::unique_ptr<drivers::InstrumentOpener> opener_;
   Link links_[2];
@@ -268,7 +260,6 @@ class Instrument {
   std::atomic<std::int64_t> heartbeat_ns_{0};
   // Statistics (under mu_).
   std::uint64_t points_measured_ = 0;
-  nlohmann::json adaptive_status_;  // of the running adaptive scan (null otherwise)
   std::deque<double> overhead_ms_;  // the last 1000 points
   mutable std::optional<std::pair<std::uint64_t, std::string>> stats_cache_;  // per points_measured_
 };

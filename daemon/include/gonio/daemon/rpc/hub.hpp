@@ -6,7 +6,9 @@
 // bound), and the hub forgets sessions that are gone.
 //
 //   topic      notification method    params
-//   progress   scan.progress          {scan, state, points_done, points_total, diverged, eta_s}
+//   progress   scan.progress          {scan, state, reason, points_done, points_total,
+//                                      points_diverged, eta_s, adaptive (running scans:
+//                                      the adaptive loop's state, null for a plain scan)}
 //   points     scan.point             a PointRecord
 //   alerts     alert                  an Alert (new, bumped, acknowledged or resolved)
 //   state      instrument.state       instrument.status result
