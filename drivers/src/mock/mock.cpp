@@ -24,6 +24,7 @@ namespace gonio::drivers::mock {
 
 struct Faults {
   int disconnect_at_point = 0, timeout_at_point = 0, garbage_at_point = 0, saturate_at_point = 0;
+  int dark_reference_at_point = 0;  // the reference white reads nothing (a shutter stuck closed)
   int stall_at_move = 0;
   milliseconds timeout_wait{200};
   milliseconds reconnect_after{0};  // how long the photometer stays unplugged
@@ -95,6 +96,7 @@ LabConfig read_config(const nlohmann::json& j) {
     c.faults.timeout_at_point = fault_index(fr, "timeout_at_point");
     c.faults.garbage_at_point = fault_index(fr, "garbage_at_point");
     c.faults.saturate_at_point = fault_index(fr, "saturate_at_point");
+    c.faults.dark_reference_at_point = fault_index(fr, "dark_reference_at_point");
     c.faults.stall_at_move = fault_index(fr, "stall_at_move");
     c.faults.timeout_wait = milliseconds(static_cast<long long>(fr.optional_in<double>("timeout_wait_ms", 200, 0, 600000)));
     c.faults.reconnect_after = milliseconds(static_cast<long long>(fr.optional_in<double>("reconnect_after_ms", 0, 0, 86400000)));
@@ -290,6 +292,8 @@ class Lab {
       r.saturated = true;
       val.assign(val.size(), cfg_.full_scale);
     }
+    // The reference read for the next sample reading.
+    if (ch == Channel::reference && points_ + 1 == f.dark_reference_at_point) val.assign(val.size(), 0.0);
     r.spectrum = Spectrum(cfg_.grid, std::move(val), std::move(unc));
     return r;
   }
