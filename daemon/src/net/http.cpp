@@ -21,6 +21,7 @@
 #include "net/accept.hpp"
 #include "net/session.hpp"
 #include "net/tls.hpp"
+#include "net/ws_session.hpp"
 
 namespace gonio::daemon::net {
 
@@ -35,29 +36,6 @@ using nlohmann::json;
 namespace {
 
 constexpr std::size_t kHeaderLimit = 16 * 1024;
-
-class WsBase;
-
-struct HttpState {
-  Context ctx;
-  bool tls = false;  // https://: transports "https" and "wss"
-  std::atomic<std::size_t> connections{0}, accepted{0}, dropped{0}, websockets{0};
-  // Connections close() asked to end that have not ended yet (a WebSocket: its closing
-  // handshake); shutdown waits a moment for them.
-  std::atomic<std::size_t> ending{0};
-  std::mutex mu;
-  std::vector<std::weak_ptr<WsBase>> ws;  // for ending the sessions of a revoked token
-  // Who to close on shutdown; expired entries are pruned as new ones arrive.
-  std::vector<std::pair<std::weak_ptr<void>, std::function<void()>>> closers;
-  HttpState(const Context& c, bool over_tls) : ctx(c), tls(over_tls) {}
-  const char* http_transport() const { return tls ? "https" : "http"; }
-  const char* ws_transport() const { return tls ? "wss" : "ws"; }
-  void add_closer(std::weak_ptr<void> owner, std::function<void()> f) {
-    std::lock_guard lock(mu);
-    std::erase_if(closers, [](const auto& c) { return c.first.expired(); });
-    closers.emplace_back(std::move(owner), std::move(f));
-  }
-};
 
 // "Bearer TOKEN" → TOKEN (scheme case-insensitive, RFC 6750 §2.1); empty when absent.
 std::string bearer(beast::string_view header) {
@@ -132,231 +110,6 @@ class OneShot final : public rpc::Session {
     set_principal(std::move(p));
   }
   bool push(std::shared_ptr<const std::string>) override { return false; }
-};
-
-// ---- WebSocket ----------------------------------------------------------------------------
-
-// What the listener knows of a WebSocket session, whatever its stream.
-class WsBase : public rpc::Session {
- public:
-  using rpc::Session::Session;
-  virtual void end(const std::string& why) = 0;
-};
-
-// `Stream`: beast::tcp_stream, or beast::ssl_stream over it (wss://).
-template <class Stream>
-class WsSession final : public WsBase, public std::enable_shared_from_this<WsSession<Stream>> {
-  using std::enable_shared_from_this<WsSession<Stream>>::shared_from_this;
-
- public:
-  WsSession(Stream stream, std::string peer, std::shared_ptr<HttpState> st)
-      : WsBase(st->ws_transport(), std::move(peer), true), ws_(std::move(stream)),
-        read_timer_(ws_.get_executor()), login_timer_(ws_.get_executor()), st_(std::move(st)),
-        limits_(st_->ctx.limits), stats_(st_->ctx.stats), out_(limits_, stats_, 0),
-        write_deadline_(ws_.get_executor(), limits_.write_timeout) {
-    ++st_->websockets;
-  }
-  ~WsSession() override {
-    --st_->websockets;
-  }
-
-  void start(http::request<http::string_body> req) {
-    auto timeouts = websocket::stream_base::timeout::suggested(beast::role_type::server);
-    timeouts.handshake_timeout = limits_.read_timeout;
-    if (limits_.idle_timeout.count() > 0) timeouts.idle_timeout = limits_.idle_timeout;
-    timeouts.keep_alive_pings = true;
-    ws_.set_option(timeouts);
-    ws_.read_message_max(limits_.max_message_bytes);
-    ws_.set_option(websocket::stream_base::decorator(
-        [](websocket::response_type& res) { res.set(http::field::server, "goniod"); }));
-    auto self = shared_from_this();
-    st_->add_closer(self, [w = std::weak_ptr<WsSession<Stream>>(self)] {
-      auto s = w.lock();
-      if (!s) return;
-      ++s->st_->ending;  // counted before it runs: shutdown waits for it
-      asio::post(s->ws_.get_executor(), [s] { s->going_away(); });
-    });
-    {
-      std::lock_guard lock(st_->mu);
-      std::erase_if(st_->ws, [](const auto& w) { return w.expired(); });
-      st_->ws.push_back(self);
-    }
-    if (principal().role == Role::none) {
-      login_timer_.expires_after(limits_.login_timeout);
-      login_timer_.async_wait([self](const error_code& ec) {
-        if (ec || self->closed_ || self->principal().role != Role::none) return;
-        ++self->stats_.login_timeouts;
-        self->close(fmt::format("did not log in within {} s",
-                                std::chrono::duration<double>(self->limits_.login_timeout).count()));
-      });
-    }
-    ws_.async_accept(req, [self](const error_code& ec) {
-      if (ec) {
-        self->close(ec.message());
-        return;
-      }
-      self->ws_.text(true);
-      self->do_read();
-    });
-  }
-
-  bool push(std::shared_ptr<const std::string> message) override {
-    if (closed_flag_.load()) return false;
-    if (!out_.admit(*message)) {
-      asio::post(ws_.get_executor(), [self = shared_from_this()] {
-        self->slow_reader("its outgoing queue is full (the peer does not read)");
-      });
-      return false;
-    }
-    asio::post(ws_.get_executor(), [self = shared_from_this(), m = std::move(message)] {
-      self->enqueue(m, true);
-    });
-    return true;
-  }
-
-  void end(const std::string& why) override {
-    asio::post(ws_.get_executor(), [self = shared_from_this(), why] { self->close(why); });
-  }
-
- private:
-  // The server is stopping: a Close frame with 1001, "going away" (RFC 6455 §7.4.1), then
-  // the peer's own Close is read and Beast's teardown ends the TCP connection. Ending it
-  // without the handshake could leave the peer's last frames unread, and closing a socket
-  // with unread data resets it: a browser reports a reset connection as an error, a clean
-  // close as a reason to reconnect.
-  void going_away() {
-    if (closed_ || closing_ || !ws_.is_open()) {
-      close("the server is stopping");
-      --st_->ending;
-      return;
-    }
-    closing_ = true;
-    login_timer_.cancel();
-    read_timer_.cancel();
-    ws_.async_close(websocket::close_reason(websocket::close_code::going_away, "the server is stopping"),
-                    [self = shared_from_this()](const error_code& ec) {
-                      self->close(ec ? ec.message() : "the server is stopping");
-                      --self->st_->ending;
-                    });
-  }
-
-  void slow_reader(const std::string& why) {
-    if (closed_) return;
-    ++stats_.slow_readers;
-    close(why);
-  }
-
-  bool may_read() const {
-    return !closed_ && !closing_ && in_flight_ < limits_.max_in_flight && !out_.backed_up();
-  }
-
-  // Frames are read one at a time so that a message that has started must complete within
-  // read_timeout, as on NDJSON (Beast's own timeouts only cover idle peers).
-  void do_read() {
-    if (reading_ || !may_read()) return;
-    reading_ = true;
-    ws_.async_read_some(buffer_, limits_.max_message_bytes, [self = shared_from_this()](const error_code& ec, std::size_t) {
-      self->reading_ = false;
-      // Closing: a request that came before the peer's Close frame goes unanswered, and the
-      // close operation ends the session.
-      if (self->closed_ || self->closing_) return;
-      if (ec) {
-        if (ec == websocket::error::message_too_big) {
-          ++self->st_->dropped;
-          spdlog::warn("ws {}: message larger than {} bytes; closing", self->peer(),
-                       self->limits_.max_message_bytes);
-        }
-        self->close(ec == websocket::error::closed ? "" : ec.message());
-        return;
-      }
-      if (!self->ws_.is_message_done()) {
-        if (!self->message_started_) {
-          self->message_started_ = true;
-          self->read_timer_.expires_after(self->limits_.read_timeout);
-          self->read_timer_.async_wait([self](const error_code& e) {
-            if (e || self->closed_ || !self->message_started_) return;
-            self->close("read timeout (message never completed)");
-          });
-        }
-        self->do_read();
-        return;
-      }
-      self->message_started_ = false;
-      self->read_timer_.cancel();
-      std::string text = beast::buffers_to_string(self->buffer_.data());
-      self->buffer_.consume(self->buffer_.size());
-      self->buffer_.shrink_to_fit();
-      auto weight = std::make_shared<std::size_t>(1);
-      const auto w = self->st_->ctx.dispatcher.handle(text, self, [self, weight](std::string r) {
-        asio::post(self->ws_.get_executor(), [self, weight, r = std::move(r)]() mutable {
-          self->in_flight_ -= std::min(self->in_flight_, *weight);
-          if (!r.empty()) self->enqueue(std::make_shared<const std::string>(std::move(r)), false);
-          self->do_read();
-        });
-      });
-      *weight = w;  // before the posted reply can run: both are on this strand
-      self->in_flight_ += w;
-      self->do_read();
-    });
-  }
-
-  void enqueue(OutputQueue::Message m, bool counted) {
-    if (closed_) {
-      if (counted) out_.forget(m);
-      return;
-    }
-    if (!out_.add(std::move(m), counted)) {
-      slow_reader("its outgoing queue is full (the peer does not read its answers)");
-      return;
-    }
-    do_write();
-  }
-
-  void do_write() {
-    if (writing_ || out_.empty() || closed_ || closing_) return;
-    writing_ = true;
-    write_deadline_.started([self = shared_from_this()] { return !self->closed_ && self->writing_; },
-                            [self = shared_from_this()](const std::string& why) { self->slow_reader(why); });
-    ws_.async_write(asio::buffer(*out_[0]), [self = shared_from_this()](const error_code& ec, std::size_t) {
-      self->writing_ = false;
-      if (self->closed_) return;
-      self->out_.pop(1);
-      if (ec) {
-        self->close(ec.message());
-        return;
-      }
-      self->do_write();
-      self->do_read();
-    });
-  }
-
-  void close(const std::string& why) {
-    if (closed_) return;
-    closed_ = true;
-    closed_flag_ = true;
-    if (!why.empty()) spdlog::info("ws {}: closing: {}", peer(), why);
-    st_->ctx.hub.remove(id());
-    read_timer_.cancel();
-    write_deadline_.cancel();
-    login_timer_.cancel();
-    error_code ignored;
-    beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
-    beast::get_lowest_layer(ws_).close();
-    if (!writing_) out_.pop(out_.size());
-  }
-
-  websocket::stream<Stream> ws_;
-  asio::steady_timer read_timer_, login_timer_;
-  std::shared_ptr<HttpState> st_;
-  Limits limits_;
-  NetStats& stats_;
-  OutputQueue out_;
-  WriteDeadline write_deadline_;
-  beast::flat_buffer buffer_;
-  std::atomic<bool> closed_flag_{false};
-  bool reading_ = false, writing_ = false, closed_ = false, message_started_ = false;
-  bool closing_ = false;  // our Close frame is sent or on its way: nothing else is written
-  std::size_t in_flight_ = 0;
 };
 
 // ---- HTTP ---------------------------------------------------------------------------------
@@ -482,10 +235,8 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession<Stream
                     false, req.version());
       tcp_().expires_never();
       upgraded_ = true;
-      auto ws = std::make_shared<WsSession<Stream>>(std::move(stream_), peer_, st_);
-      if (who) ws->set_principal(*who);
-      else if (certified_) ws->set_principal(as(*certified_, st_->ws_transport()));
-      ws->start(std::move(req));
+      if (!who && certified_) who = as(*certified_, st_->ws_transport());
+      start_websocket(std::move(stream_), peer_, st_, std::move(who), std::move(req));
       return;
     }
     if (target != "/rpc" && st_->ctx.web && (req.method() == http::verb::get))
@@ -674,20 +425,7 @@ class HttpListener final : public Listener, public std::enable_shared_from_this<
     for (auto& c : closers) c.second();
   }
 
-  void end_sessions_of(const std::string& name) override {
-    std::vector<std::shared_ptr<WsBase>> live;
-    {
-      std::lock_guard lock(st_->mu);
-      for (auto& w : st_->ws)
-        if (auto s = w.lock()) live.push_back(std::move(s));
-    }
-    for (auto& s : live) {
-      const auto p = s->principal();
-      if (p.role == Role::none || p.name != name) continue;
-      ++st_->ctx.stats.revoked_sessions;
-      s->end(fmt::format("the token '{}' was revoked", name));
-    }
-  }
+  void end_sessions_of(const std::string& name) override { st_->ws.end_sessions_of(name, st_->ctx.stats); }
 
   bool closing() const override { return st_->ending.load() > 0; }
 

@@ -9,7 +9,6 @@
 #include <cerrno>
 #include <atomic>
 #include <filesystem>
-#include <mutex>
 
 #include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange without it
 
@@ -47,8 +46,7 @@ struct ListenerState {
   std::string kind;  // "unix", "tcp", "tls"
   std::atomic<std::size_t> connections{0}, accepted{0}, dropped{0};
   std::atomic<std::size_t> ending{0};  // sessions close() asked to end that have not yet
-  std::mutex mu;
-  std::vector<std::weak_ptr<rpc::Session>> sessions;
+  SessionList sessions;
   explicit ListenerState(const Context& c, std::string k) : ctx(c), kind(std::move(k)) {}
 };
 
@@ -58,18 +56,17 @@ struct ListenerState {
 template <class Protocol, bool Tls>
 using StreamOf = std::conditional_t<Tls, beast::ssl_stream<typename Protocol::socket>, typename Protocol::socket>;
 
+// An NDJSON connection: one message a line. Its queue, deadlines and slow-reader rule are
+// StreamSession's; here, reading lines and writing them with their newlines.
 template <class Protocol, bool Tls = false>
-class NdjsonSession final : public rpc::Session,
-                            public std::enable_shared_from_this<NdjsonSession<Protocol, Tls>> {
+class NdjsonSession final : public StreamSession {
  public:
   using Stream = StreamOf<Protocol, Tls>;
   using Socket = typename Protocol::socket;
 
   NdjsonSession(Stream stream, std::string peer, std::shared_ptr<ListenerState> ls)
-      : rpc::Session(ls->kind, std::move(peer), true), socket_(std::move(stream)),
-        timer_(socket_.get_executor()), login_timer_(socket_.get_executor()), ls_(std::move(ls)),
-        limits_(ls_->ctx.limits), stats_(ls_->ctx.stats), out_(limits_, stats_, 1),
-        write_deadline_(socket_.get_executor(), limits_.write_timeout) {}
+      : StreamSession(ls->kind, std::move(peer), ls->ctx, stream.get_executor(), 1),
+        socket_(std::move(stream)), timer_(executor_), ls_(std::move(ls)) {}
 
   ~NdjsonSession() override {
     --ls_->connections;
@@ -81,12 +78,12 @@ class NdjsonSession final : public rpc::Session,
       // The handshake has read_timeout to finish, as any started message; until then the
       // peer is in no hub, has no role and is owed nothing.
       timer_.expires_after(limits_.read_timeout);
-      timer_.async_wait([self = this->shared_from_this()](const error_code& ec) {
+      timer_.async_wait([self = self()](const error_code& ec) {
         if (ec || self->closed_ || self->handshaken_) return;
         self->close(fmt::format("TLS handshake did not complete within {} s",
                                 std::chrono::duration<double>(self->limits_.read_timeout).count()));
       });
-      socket_.async_handshake(asio::ssl::stream_base::server, [self = this->shared_from_this()](const error_code& ec) {
+      socket_.async_handshake(asio::ssl::stream_base::server, [self = self()](const error_code& ec) {
         if (self->closed_) return;
         if (ec) {
           self->close("TLS handshake failed: " + ec.message());
@@ -103,51 +100,24 @@ class NdjsonSession final : public rpc::Session,
     begin();
   }
 
- private:
-  void begin() {
-    last_activity_ = Clock::now();
-    if (principal().role == Role::none) {
-      // A peer without a role can only log in: it gets login_timeout to do so.
-      login_timer_.expires_after(limits_.login_timeout);
-      login_timer_.async_wait([self = this->shared_from_this()](const error_code& ec) {
-        if (ec || self->closed_ || self->principal().role != Role::none) return;
-        ++self->stats_.login_timeouts;
-        self->close(fmt::format("did not log in within {} s",
-                                std::chrono::duration<double>(self->limits_.login_timeout).count()));
-      });
-    }
-    arm_timer();
-    do_read();
-  }
-
- public:
-  bool push(std::shared_ptr<const std::string> message) override {
-    if (closing_.load()) return false;
-    if (!out_.admit(*message)) {
-      asio::post(socket_.get_executor(), [self = this->shared_from_this()] {
-        self->slow_reader("its outgoing queue is full (the peer does not read)");
-      });
-      return false;
-    }
-    asio::post(socket_.get_executor(), [self = this->shared_from_this(), m = std::move(message)] {
-      self->enqueue(m);
-    });
-    return true;
-  }
-
   void shutdown() {
     ++ls_->ending;  // counted before it runs: shutdown waits for it
-    asio::post(socket_.get_executor(), [self = this->shared_from_this()] {
+    asio::post(executor_, [self = self()] {
       self->close("the server is stopping");
       --self->ls_->ending;
     });
   }
 
-  void end(const std::string& why) {
-    asio::post(socket_.get_executor(), [self = this->shared_from_this(), why] { self->close(why); });
+ private:
+  std::shared_ptr<NdjsonSession> self() { return std::static_pointer_cast<NdjsonSession>(shared_from_this()); }
+
+  void begin() {
+    last_activity_ = Clock::now();
+    start_login_deadline();
+    arm_timer();
+    do_read();
   }
 
- private:
   // Keeps the shared budget's count of this connection's unparsed input up to date.
   void account_input() {
     const auto now = buffer_.size();
@@ -169,8 +139,7 @@ class NdjsonSession final : public rpc::Session,
     }
     arm_timer();
     reading_ = true;
-    socket_.async_read_some(asio::buffer(chunk_), [self = this->shared_from_this()](
-                                                      const error_code& ec, std::size_t n) {
+    socket_.async_read_some(asio::buffer(chunk_), [self = self()](const error_code& ec, std::size_t n) {
       self->reading_ = false;
       self->on_read(ec, n);
     });
@@ -259,11 +228,11 @@ class NdjsonSession final : public rpc::Session,
     };
     auto h = std::make_shared<Handoff>();
     const auto weight = ls_->ctx.dispatcher.handle(
-        line, this->shared_from_this(), [self = this->shared_from_this(), h](std::string response) {
+        line, shared_from_this(), [self = self(), h](std::string response) {
           h->text = std::move(response);
           int inside = 0;
           if (h->state.compare_exchange_strong(inside, 1)) return;
-          asio::post(self->socket_.get_executor(), [self, h] {
+          asio::post(self->executor_, [self, h] {
             self->on_reply(std::move(h->text), h->weight);
             self->do_read();
           });
@@ -276,42 +245,14 @@ class NdjsonSession final : public rpc::Session,
     if (!h->state.compare_exchange_strong(inside, 2)) on_reply(std::move(h->text), weight);
   }
 
-  void on_reply(std::string r, std::size_t weight) {
-    in_flight_ -= std::min(in_flight_, weight);
-    if (!r.empty()) enqueue(std::make_shared<const std::string>(std::move(r)), false);
-  }
-
-  // On the strand. `counted` says whether push() already counted the message.
-  void enqueue(OutputQueue::Message m, bool counted = true) {
-    if (closed_) {
-      if (counted) out_.forget(m);
-      return;
-    }
-    if (!out_.add(std::move(m), counted)) {
-      slow_reader("its outgoing queue is full (the peer does not read its answers)");
-      return;
-    }
-    do_write();
-  }
-
-  void slow_reader(const std::string& why) {
-    if (closed_) return;
-    ++stats_.slow_readers;
-    close(why);
-  }
-
   // Everything queued goes out in one gathered write (replies and notifications that piled
   // up while the previous write was in flight), with a deadline.
-  void do_write() {
+  void write_queued() override {
     if (writing_ || out_.empty() || closed_) return;
-    writing_ = true;
+    write_started();
     static constexpr std::size_t kMaxGather = 32;  // 64 buffers: one writev
     writing_count_ = std::min(out_.size(), kMaxGather);
-    const auto done = [self = this->shared_from_this()](const error_code& ec, std::size_t) {
-      self->on_written(ec);
-    };
-    write_deadline_.started([self = this->shared_from_this()] { return !self->closed_ && self->writing_; },
-                            [self = this->shared_from_this()](const std::string& why) { self->slow_reader(why); });
+    const auto done = [self = self()](const error_code& ec, std::size_t) { self->on_written(ec); };
     if (writing_count_ == 1) {
       const std::array<asio::const_buffer, 2> bufs{asio::buffer(*out_[0]), asio::buffer("\n", 1)};
       asio::async_write(socket_, bufs, done);
@@ -327,18 +268,12 @@ class NdjsonSession final : public rpc::Session,
   }
 
   void on_written(const error_code& ec) {
-    writing_ = false;
-    if (closed_) return;
-    out_.pop(writing_count_);
-    if (ec) {
-      close(ec.message());
-      return;
-    }
+    if (!write_ended(ec, writing_count_)) return;
     if (out_.empty() && close_after_write_) {
       close("");
       return;
     }
-    do_write();
+    write_queued();
     do_read();  // reading may have paused on the queue
   }
 
@@ -361,7 +296,7 @@ class NdjsonSession final : public rpc::Session,
     waiting_ = true;
     wait_until_ = deadline_;
     timer_.expires_at(deadline_);
-    timer_.async_wait([self = this->shared_from_this(), generation = ++wait_generation_](const error_code& ec) {
+    timer_.async_wait([self = self(), generation = ++wait_generation_](const error_code& ec) {
       if (generation != self->wait_generation_) return;  // replaced by an earlier deadline
       self->waiting_ = false;
       if (ec || self->closed_ || self->deadline_ == Clock::time_point::max()) return;
@@ -376,44 +311,28 @@ class NdjsonSession final : public rpc::Session,
     });
   }
 
-  void close(const std::string& why) {
-    if (closed_) return;
-    closed_ = true;
-    closing_ = true;
-    if (!why.empty()) {
-      ++ls_->dropped;
-      spdlog::info("{} {}: closing: {}", transport(), peer(), why);
-    }
+  void close(const std::string& why) override {
+    if (!mark_closed(why)) return;
+    if (!why.empty()) ++ls_->dropped;
     error_code ignored;
     timer_.cancel();
-    write_deadline_.cancel();
-    login_timer_.cancel();
     // Over TLS too: the socket is closed without a close_notify, which a peer that stopped
     // reading would never take.
     beast::get_lowest_layer(socket_).shutdown(Socket::shutdown_both, ignored);
     beast::get_lowest_layer(socket_).close(ignored);
-    ls_->ctx.hub.remove(id());
-    // What is queued is freed now, not when the last handler lets go of the session.
-    if (!writing_) out_.pop(out_.size());
     buffer_.clear();
     buffer_.shrink_to_fit();
     account_input();
   }
 
   Stream socket_;
-  asio::steady_timer timer_, login_timer_;
+  asio::steady_timer timer_;
   std::shared_ptr<ListenerState> ls_;
-  Limits limits_;
-  NetStats& stats_;
-  OutputQueue out_;
-  WriteDeadline write_deadline_;
   std::array<char, 16384> chunk_{};
   std::string buffer_;
   std::size_t writing_count_ = 0;  // messages at the front of out_ being written
-  std::atomic<bool> closing_{false};
-  bool reading_ = false, writing_ = false, closed_ = false, close_after_write_ = false;
+  bool reading_ = false, close_after_write_ = false;
   bool handshaken_ = false;  // TLS
-  std::size_t in_flight_ = 0;
   std::size_t input_accounted_ = 0;  // bytes of buffer_ counted in stats_.buffered_bytes
   Clock::time_point partial_since_, last_activity_, deadline_;
   Clock::time_point wait_until_;    // when the outstanding wait fires
@@ -448,21 +367,7 @@ class NdjsonListener final : public Listener,
     });
   }
 
-  void end_sessions_of(const std::string& name) override {
-    std::vector<std::shared_ptr<rpc::Session>> live;
-    {
-      std::lock_guard lock(ls_->mu);
-      for (auto& w : ls_->sessions)
-        if (auto s = w.lock()) live.push_back(std::move(s));
-    }
-    for (auto& s : live) {
-      const auto p = s->principal();
-      if (p.role == Role::none || p.name != name) continue;
-      ++ls_->ctx.stats.revoked_sessions;
-      std::static_pointer_cast<NdjsonSession<Protocol, Tls>>(s)->end(
-          fmt::format("the token '{}' was revoked", name));
-    }
-  }
+  void end_sessions_of(const std::string& name) override { ls_->sessions.end_sessions_of(name, ls_->ctx.stats); }
 
   std::string endpoint() const override { return endpoint_; }
 
@@ -472,13 +377,7 @@ class NdjsonListener final : public Listener,
       self->acceptor_.close(ignored);
       self->backoff_.cancel();
     });
-    std::vector<std::weak_ptr<rpc::Session>> sessions;
-    {
-      std::lock_guard lock(ls_->mu);
-      sessions.swap(ls_->sessions);
-    }
-    for (auto& w : sessions)
-      if (auto s = w.lock()) std::static_pointer_cast<NdjsonSession<Protocol, Tls>>(s)->shutdown();
+    for (auto& s : ls_->sessions.take()) std::static_pointer_cast<NdjsonSession<Protocol, Tls>>(s)->shutdown();
   }
 
   bool closing() const override { return ls_->ending.load() > 0; }
@@ -554,11 +453,7 @@ class NdjsonListener final : public Listener,
     else
       session = std::make_shared<NdjsonSession<Protocol, Tls>>(std::move(socket), peer, ls_);
     session->set_principal(principal);
-    {
-      std::lock_guard lock(ls_->mu);
-      std::erase_if(ls_->sessions, [](const auto& w) { return w.expired(); });
-      ls_->sessions.push_back(session);
-    }
+    ls_->sessions.add(session);
     session->start();
   }
 

@@ -6,7 +6,9 @@
 #include <algorithm>
 
 #include <boost/asio/io_context.hpp>
+#include <boost/asio/post.hpp>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include "gonio/proto/error.hpp"
 
@@ -90,6 +92,125 @@ void OutputQueue::release(std::size_t bytes) {
 std::string WriteDeadline::late_message() const {
   return fmt::format("a write did not complete within {} s (the peer does not read)",
                      std::chrono::duration<double>(timeout_).count());
+}
+
+StreamSession::StreamSession(std::string transport, std::string peer, const Context& ctx,
+                             asio::any_io_executor executor, std::size_t framing)
+    : rpc::Session(std::move(transport), std::move(peer), true), executor_(std::move(executor)),
+      limits_(ctx.limits), stats_(ctx.stats), out_(limits_, stats_, framing), hub_(ctx.hub),
+      write_deadline_(executor_, limits_.write_timeout), login_timer_(executor_) {}
+
+bool StreamSession::push(std::shared_ptr<const std::string> message) {
+  if (refusing_.load()) return false;
+  if (!out_.admit(*message)) {
+    asio::post(executor_, [self = shared_from_this()] {
+      self->slow_reader("its outgoing queue is full (the peer does not read)");
+    });
+    return false;
+  }
+  asio::post(executor_, [self = shared_from_this(), m = std::move(message)] { self->enqueue(m, true); });
+  return true;
+}
+
+void StreamSession::end(std::string why) {
+  asio::post(executor_, [self = shared_from_this(), why = std::move(why)] { self->close(why); });
+}
+
+void StreamSession::start_login_deadline() {
+  if (principal().role != Role::none) return;
+  login_timer_.expires_after(limits_.login_timeout);
+  login_timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+    if (ec || self->closed_ || self->principal().role != Role::none) return;
+    ++self->stats_.login_timeouts;
+    self->close(fmt::format("did not log in within {} s",
+                            std::chrono::duration<double>(self->limits_.login_timeout).count()));
+  });
+}
+
+void StreamSession::enqueue(OutputQueue::Message m, bool admitted) {
+  if (closed_) {
+    if (admitted) out_.forget(m);
+    return;
+  }
+  if (!out_.add(std::move(m), admitted)) {
+    slow_reader("its outgoing queue is full (the peer does not read its answers)");
+    return;
+  }
+  write_queued();
+}
+
+void StreamSession::on_reply(std::string reply, std::size_t weight) {
+  in_flight_ -= std::min(in_flight_, weight);
+  if (!reply.empty()) enqueue(std::make_shared<const std::string>(std::move(reply)), false);
+}
+
+void StreamSession::write_started() {
+  writing_ = true;
+  write_deadline_.started([self = shared_from_this()] { return !self->closed_ && self->writing_; },
+                          [self = shared_from_this()](const std::string& why) { self->slow_reader(why); });
+}
+
+bool StreamSession::write_ended(const boost::system::error_code& ec, std::size_t n) {
+  writing_ = false;
+  if (closed_) return false;
+  out_.pop(n);
+  if (ec) {
+    close(ec.message());
+    return false;
+  }
+  return true;
+}
+
+bool StreamSession::mark_closed(const std::string& why) {
+  if (closed_) return false;
+  closed_ = true;
+  refusing_ = true;
+  if (!why.empty()) spdlog::info("{} {}: closing: {}", transport(), peer(), why);
+  write_deadline_.cancel();
+  login_timer_.cancel();
+  hub_.remove(id());
+  // What is queued is freed now, not when the last handler lets go of the session.
+  if (!writing_) out_.pop(out_.size());
+  return true;
+}
+
+void StreamSession::slow_reader(const std::string& why) {
+  if (closed_) return;
+  ++stats_.slow_readers;
+  close(why);
+}
+
+void SessionList::add(const std::shared_ptr<StreamSession>& session) {
+  std::lock_guard lock(mu_);
+  std::erase_if(sessions_, [](const auto& w) { return w.expired(); });
+  sessions_.push_back(session);
+}
+
+std::vector<std::shared_ptr<StreamSession>> SessionList::take() {
+  std::vector<std::weak_ptr<StreamSession>> all;
+  {
+    std::lock_guard lock(mu_);
+    all.swap(sessions_);
+  }
+  std::vector<std::shared_ptr<StreamSession>> live;
+  for (auto& w : all)
+    if (auto s = w.lock()) live.push_back(std::move(s));
+  return live;
+}
+
+void SessionList::end_sessions_of(const std::string& name, NetStats& stats) {
+  std::vector<std::shared_ptr<StreamSession>> live;
+  {
+    std::lock_guard lock(mu_);
+    for (auto& w : sessions_)
+      if (auto s = w.lock()) live.push_back(std::move(s));
+  }
+  for (auto& s : live) {
+    const auto p = s->principal();
+    if (p.role == Role::none || p.name != name) continue;
+    ++stats.revoked_sessions;
+    s->end(fmt::format("the token '{}' was revoked", name));
+  }
 }
 
 Role unix_role(const Limits& l, std::uint32_t uid, const std::vector<gid_t>& gids) {

@@ -1,6 +1,6 @@
-// What every listener's sessions share (ndjson.cpp, http.cpp): the outgoing queue
-// of a connection with its limits, the write deadline, the role of a Unix-socket peer, and
-// binding a TCP address.
+// What every listener's sessions share (ndjson.cpp, http.cpp, ws_session.cpp): the outgoing
+// queue of a connection with its limits, the write deadline, the session of a connection that
+// carries notifications, the role of a Unix-socket peer, and binding a TCP address.
 #pragma once
 
 #include <sys/types.h>
@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <deque>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -106,6 +107,78 @@ class WriteDeadline {
   std::chrono::milliseconds timeout_;
   Clock::time_point started_;
   bool armed_ = false;
+};
+
+// A connection that carries a JSON-RPC session and its notifications, NDJSON lines or
+// WebSocket messages: what such a session does the same way whatever its stream (plain TCP,
+// a Unix socket, TLS) and framing. The transports (ndjson.cpp's NdjsonSession,
+// ws_session.cpp's WsSession) read, write and close their stream. Every handler runs on one
+// strand, `executor`; push() and end() may be called from any thread.
+class StreamSession : public rpc::Session, public std::enable_shared_from_this<StreamSession> {
+ public:
+  // `framing`: bytes the transport adds to each message (OutputQueue).
+  StreamSession(std::string transport, std::string peer, const Context& ctx,
+                boost::asio::any_io_executor executor, std::size_t framing);
+
+  // Admits the message, then queues it on the strand. One that finds no room drops the peer
+  // as a slow reader.
+  bool push(std::shared_ptr<const std::string> message) final;
+  // The session closes on the strand, saying why (its token was revoked).
+  void end(std::string why);
+
+ protected:
+  // The transport's part, on the strand: start writing what is queued unless a write is on;
+  // close the connection (once; `why` empty: an orderly end, not logged).
+  virtual void write_queued() = 0;
+  virtual void close(const std::string& why) = 0;
+
+  // A peer without a role can only log in: it gets login_timeout to do so.
+  void start_login_deadline();
+  void cancel_login_deadline() { login_timer_.cancel(); }
+  // Queues `m` and writes; `admitted`: push() has reserved its room.
+  void enqueue(OutputQueue::Message m, bool admitted);
+  // The reply to requests that weigh `weight` (a batch: its elements) is back; empty: nothing
+  // to send (notifications only).
+  void on_reply(std::string reply, std::size_t weight);
+  // A write is starting: it has write_timeout to complete.
+  void write_started();
+  // The write of the first `n` queued messages ended: false when the session is closed (or
+  // closes now, on an error).
+  bool write_ended(const boost::system::error_code& ec, std::size_t n);
+  // What every close() does first: false when the session was closed already. Logs `why`,
+  // stops the deadlines, leaves the hub and frees the queue unless a write holds it.
+  bool mark_closed(const std::string& why);
+  // The queue is full or a write missed its deadline: the peer does not read.
+  void slow_reader(const std::string& why);
+
+  boost::asio::any_io_executor executor_;
+  const Limits limits_;
+  NetStats& stats_;
+  OutputQueue out_;
+  bool closed_ = false, writing_ = false;
+  std::size_t in_flight_ = 0;  // requests (batch elements) being processed
+
+ private:
+  Hub& hub_;
+  WriteDeadline write_deadline_;
+  boost::asio::steady_timer login_timer_;
+  std::atomic<bool> refusing_{false};  // closed_, as push() on any thread sees it
+};
+
+// The live sessions of a listener: for ending those of a revoked token, and all on shutdown.
+class SessionList {
+ public:
+  // Forgets the sessions that have ended meanwhile.
+  void add(const std::shared_ptr<StreamSession>& session);
+  // The live sessions, and the list emptied (the listener is closing).
+  std::vector<std::shared_ptr<StreamSession>> take();
+  // Ends every live session logged in with the token `name`, counting each in
+  // stats.revoked_sessions.
+  void end_sessions_of(const std::string& name, NetStats& stats);
+
+ private:
+  std::mutex mu_;
+  std::vector<std::weak_ptr<StreamSession>> sessions_;
 };
 
 // The role of a Unix-socket peer from its uid and groups: the highest any of them maps to.

@@ -24,7 +24,8 @@
 // (batch elements) being processed (reading pauses), and an outgoing queue bounded in
 // messages and bytes, per connection and over all of them, with a deadline on every write:
 // a peer that does not read is dropped rather than buffered (counted as a slow reader).
-// The queue and the write deadline are written once for every transport (src/net/session.hpp).
+// The queue, the write and login deadlines and the slow-reader rule are written once for
+// every transport (src/net/session.hpp: StreamSession, under NDJSON and WebSocket sessions).
 // Reading also pauses while a connection has more than kReadPauseBytes waiting to go out,
 // so a client that pipelines requests without reading the answers stops being served
 // before it costs memory.
