@@ -222,10 +222,18 @@ void scans_table(const json& list, const std::map<std::int64_t, std::string>& na
   std::cout << t.render();
 }
 
-void add_scan_commands(CLI::App& app, Context& ctx) {
-  auto a = std::make_shared<ScanArgs>();
-  auto* scan = app.add_subcommand("scan", "scans: submit, follow, control, export");
-  scan->require_subcommand(1);
+namespace {
+
+using Args = std::shared_ptr<ScanArgs>;
+
+// A subcommand of `scan` taking the scan id as its one positional argument.
+CLI::App* id_command(CLI::App* scan, const Args& a, const std::string& name, const std::string& help) {
+  auto* c = scan->add_subcommand(name, help);
+  c->add_option("scan", a->id, "scan id")->required();
+  return c;
+}
+
+void add_submit(CLI::App* scan, Context& ctx, const Args& a) {
   auto* submit = scan->add_subcommand("submit", "queue a scan");
   submit->add_option("--sample", a->sample, "sample id or name")->required();
   submit->add_option("--geometry", a->geometries, "45as15, 45/-30 or astm (repeatable)");
@@ -283,13 +291,10 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
       return 0;
     };
   });
-  // A subcommand taking the scan id as its one positional argument.
-  const auto id_cmd = [scan, a](const std::string& name, const std::string& help) {
-    auto* c = scan->add_subcommand(name, help);
-    c->add_option("scan", a->id, "scan id")->required();
-    return c;
-  };
-  auto* get = id_cmd("get", "one scan, its verdict and alerts");
+}
+
+void add_get(CLI::App* scan, Context& ctx, const Args& a) {
+  auto* get = id_command(scan, a, "get", "one scan, its verdict and alerts");
   get->add_flag("--exit-status", a->exit_status,
                 "exit 10 when the verdict is out_of_tolerance, 11 when instrument_out_of_spec");
   get->callback([&ctx, a] {
@@ -302,6 +307,9 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
       return a->exit_status ? verdict_exit_code(r) : 0;
     };
   });
+}
+
+void add_list(CLI::App* scan, Context& ctx, const Args& a) {
   auto* slist = scan->add_subcommand("list", "recent scans");
   slist->add_option("--state", a->state);
   slist->add_option("--sample", a->sample);
@@ -321,8 +329,12 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
       return 0;
     };
   });
+}
+
+// pause, resume and cancel.
+void add_control(CLI::App* scan, Context& ctx, const Args& a) {
   for (const char* verb : {"pause", "resume", "cancel"}) {
-    auto* c = id_cmd(verb, fmt::format("{} a scan", verb));
+    auto* c = id_command(scan, a, verb, fmt::format("{} a scan", verb));
     if (std::string(verb) != "resume") c->add_option("--reason", a->reason);
     c->callback([&ctx, a, verb] {
       ctx.action = [a, verb](Session& s) {
@@ -334,7 +346,10 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
       };
     });
   }
-  auto* pts = id_cmd("points", "measured and predicted points (paged)");
+}
+
+void add_points(CLI::App* scan, Context& ctx, const Args& a) {
+  auto* pts = id_command(scan, a, "points", "measured and predicted points (paged)");
   pts->add_option("--offset", a->offset);
   pts->add_option("--limit", a->limit);
   pts->add_option("--wavelength", a->wavelength, "the channel to show, nm (default: the one nearest 550 nm)");
@@ -349,7 +364,10 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
       return 0;
     };
   });
-  auto* ex = id_cmd("export", "write the scan as csv, json, bsdf (IS-SA) or ssdd");
+}
+
+void add_export(CLI::App* scan, Context& ctx, const Args& a) {
+  auto* ex = id_command(scan, a, "export", "write the scan as csv, json, bsdf (IS-SA) or ssdd");
   ex->add_option("--format", a->format)->check(CLI::IsMember({"csv", "json", "bsdf", "ssdd"}));
   ex->add_option("--output,-o", a->output, "file (default: scan-ID.FORMAT; '-' for stdout)");
   ex->callback([&ctx, a] {
@@ -380,7 +398,10 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
       return 0;
     };
   });
-  auto* fit = id_cmd("fit", "fit a BSDF model's free ('?') parameters to the scan through the twin");
+}
+
+void add_fit(CLI::App* scan, Context& ctx, const Args& a) {
+  auto* fit = id_command(scan, a, "fit", "fit a BSDF model's free ('?') parameters to the scan through the twin");
   fit->add_option("--model", a->model, "BSDF spec with '?' marks, e.g. 'conductor:alpha=?,eta=0.2,k=3.9'")
       ->required();
   fit->add_option("--samples", a->samples, "twin paths per geometry and evaluation (default 8192)");
@@ -393,13 +414,33 @@ void add_scan_commands(CLI::App& app, Context& ctx) {
       return 0;
     };
   });
-  add_material_command(scan, ctx, a);
-  auto* watch = id_cmd("watch", "follow a scan live until it ends, then print its verdict");
+}
+
+void add_watch(CLI::App* scan, Context& ctx, const Args& a) {
+  auto* watch = id_command(scan, a, "watch", "follow a scan live until it ends, then print its verdict");
   watch->add_flag("--exit-status", a->exit_status,
                   "exit 10 when the verdict is out_of_tolerance, 11 when instrument_out_of_spec");
   watch->callback([&ctx, a] {
     ctx.action = [a](Session& s) { return watch_scan(s, a->id, s.options().json, a->exit_status); };
   });
+}
+
+}  // namespace
+
+// The subcommands in the order `gonioctl scan --help` lists them.
+void add_scan_commands(CLI::App& app, Context& ctx) {
+  auto a = std::make_shared<ScanArgs>();
+  auto* scan = app.add_subcommand("scan", "scans: submit, follow, control, export");
+  scan->require_subcommand(1);
+  add_submit(scan, ctx, a);
+  add_get(scan, ctx, a);
+  add_list(scan, ctx, a);
+  add_control(scan, ctx, a);
+  add_points(scan, ctx, a);
+  add_export(scan, ctx, a);
+  add_fit(scan, ctx, a);
+  add_material_command(scan, ctx, a);
+  add_watch(scan, ctx, a);
 }
 
 }  // namespace gonio::daemon::ctl
