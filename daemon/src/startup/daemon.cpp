@@ -44,6 +44,7 @@
 #include "gonio/daemon/store/retention.hpp"
 #include "gonio/daemon/store/store.hpp"
 #include "startup/instrument_tables.hpp"
+#include "startup/signals.hpp"
 
 #include "gonio/proto/json_util.hpp"
 #include "gonio/proto/version.hpp"
@@ -273,6 +274,36 @@ rpc::DispatchLimits dispatch_limits(const Config& config) {
 
 // The dashboard's files. Unless server.web_root is set, a build tree's goniod serves the
 // tree's own (<build>/web/dist, beside bin/) before the installed one.
+// Blocking methods run on `workers`, each after yielding to the measurement and waiting its
+// turn at the governor; control methods on `control`.
+rpc::Dispatcher make_dispatcher(const Config& config, asio::thread_pool& workers, asio::thread_pool& control,
+                                rpc::ClientGovernor& governor) {
+  return rpc::Dispatcher(
+      [&workers, &governor](std::function<void()> f) {
+        asio::post(workers, [&governor, f = std::move(f)] {
+          yield_to_measurement();
+          // The governor counts the requests' own CPU, on these threads: not the io threads'
+          // reading, writing and notifications, which follow the measurement's pace.
+          thread_local const bool counted = (rpc::mark_client_thread(), true);
+          (void)counted;
+          governor.wait_turn();
+          f();
+        });
+      },
+      [&control](std::function<void()> f) { asio::post(control, std::move(f)); }, dispatch_limits(config));
+}
+
+// system.info's "transports": an object of counters per listener.
+std::function<void(JsonWriter&)> listener_stats(const std::vector<std::shared_ptr<net::Listener>>& listeners) {
+  return [&listeners](JsonWriter& w) {
+    for (const auto& l : listeners) {
+      w.begin_object();
+      l->write_stats(w);
+      w.end_object();
+    }
+  };
+}
+
 std::shared_ptr<const WebRoot> load_dashboard(const Config& config) {
   std::error_code exe_ec;
   const auto web_root = config.served_web_root(fs::read_symlink("/proc/self/exe", exe_ec).string());
@@ -316,39 +347,6 @@ json publish_endpoints(const fs::path& state, const std::vector<std::shared_ptr<
   return endpoints;
 }
 
-// systemd's watchdog, when the unit has one: petted at half its period while the
-// instrument thread is alive too, allowing for the longest device call.
-class Watchdog {
- public:
-  Watchdog(asio::io_context& io, const Config& config, const Instrument& instrument)
-      : timer_(io), instrument_(instrument),
-        stale_(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-            std::max({config.move_timeout, config.home_timeout, config.measure_timeout}) +
-            std::chrono::seconds(10))) {}
-
-  void start() {
-    std::uint64_t us = 0;
-    if (sd_watchdog_enabled(0, &us) <= 0 || us == 0) return;
-    period_ = std::chrono::microseconds(us / 2);
-    pet();
-  }
-
- private:
-  void pet() {
-    if (std::chrono::steady_clock::now() - instrument_.heartbeat() < stale_) sd_notify(0, "WATCHDOG=1");
-    else spdlog::error("watchdog: the instrument thread has not run for too long");
-    timer_.expires_after(period_);
-    timer_.async_wait([this](const boost::system::error_code& ec) {
-      if (!ec) pet();
-    });
-  }
-
-  asio::steady_timer timer_;
-  const Instrument& instrument_;
-  std::chrono::steady_clock::duration stale_;
-  std::chrono::microseconds period_{0};
-};
-
 // Audit rows of the daemon itself are not worth refusing to run for on a full disk.
 void audit_self(Store& store, const std::string& action, const json& detail) {
   try {
@@ -358,79 +356,6 @@ void audit_self(Store& store, const std::string& action, const json& detail) {
     spdlog::warn("{} not audited: {}", action, e.what());
   }
 }
-
-// SIGTERM and SIGINT: the listeners close, the point in progress is finished and the scan
-// parked, then the io threads stop. Parking may wait for a device: it runs on a thread of
-// its own, off the network threads. Connections asked to close get up to kCloseGrace more
-// to end (a WebSocket's peer answers the server's Close frame); one that has not is cut off.
-constexpr auto kCloseGrace = std::chrono::seconds(2);
-
-class StopOnSignal {
- public:
-  StopOnSignal(asio::io_context& io, std::vector<std::shared_ptr<net::Listener>>& listeners,
-               Instrument& instrument)
-      : io_(io), signals_(io, SIGINT, SIGTERM), listeners_(listeners), instrument_(instrument) {
-    signals_.async_wait([this](const boost::system::error_code& ec, int sig) {
-      if (ec || stopping_) return;
-      stopping_ = true;
-      spdlog::info("{}: stopping (finishing the point in progress)", sig == SIGTERM ? "SIGTERM" : "SIGINT");
-      sd_notify(0, "STOPPING=1\nSTATUS=stopping");
-      for (auto& l : listeners_) l->close();
-      stopper_ = std::thread([this] {
-        instrument_.shutdown();
-        const auto closing = [this] {
-          return std::any_of(listeners_.begin(), listeners_.end(), [](const auto& l) { return l->closing(); });
-        };
-        for (const auto end = std::chrono::steady_clock::now() + kCloseGrace;
-             closing() && std::chrono::steady_clock::now() < end;)
-          std::this_thread::sleep_for(std::chrono::milliseconds(5));
-        io_.stop();
-      });
-    });
-  }
-  void join() {
-    if (stopper_.joinable()) stopper_.join();
-  }
-
- private:
-  asio::io_context& io_;
-  asio::signal_set signals_;
-  std::vector<std::shared_ptr<net::Listener>>& listeners_;
-  Instrument& instrument_;
-  bool stopping_ = false;
-  std::thread stopper_;
-};
-
-// SIGHUP: the TLS listeners' certificate and key are read again (a renewed certificate put
-// in place of the old one). New handshakes use them; connections already up keep theirs. A
-// file that does not pass the checks of --check-config is logged and the old ones stay.
-class ReloadOnSignal {
- public:
-  ReloadOnSignal(asio::io_context& io, std::shared_ptr<net::TlsServer> tls) : signals_(io, SIGHUP), tls_(std::move(tls)) {
-    wait();
-  }
-
- private:
-  void wait() {
-    signals_.async_wait([this](const boost::system::error_code& ec, int) {
-      if (ec) return;
-      if (!tls_) {
-        spdlog::info("SIGHUP: nothing to reload (no [server.tls])");
-      } else {
-        try {
-          net::reload_tls(*tls_);
-          spdlog::info("SIGHUP: reloaded the TLS certificate and key; new connections use them");
-        } catch (const Error& e) {
-          spdlog::error("SIGHUP: kept the TLS certificate in use: {}", e.what());
-        }
-      }
-      wait();
-    });
-  }
-
-  asio::signal_set signals_;
-  std::shared_ptr<net::TlsServer> tls_;
-};
 
 // The network threads: `main` (listeners, signals, timers, the webhook) and, with
 // server.io_threads = N > 1, N - 1 io_contexts more, one thread each. Each connection is
@@ -481,6 +406,121 @@ class IoThreads {
   std::vector<std::unique_ptr<asio::io_context>> more_;
   std::atomic<std::size_t> next_{0};
 };
+
+// goniod serving from the opened store until a signal stops it: the services, the network,
+// the instrument, then an orderly shutdown. Throws Error as run_daemon maps to exit codes.
+int serve(const Config& config, const fs::path& state, OpenedStore& opened) {
+  auto& store = opened.store;
+  Auth auth(config.tokens, *store);
+  write_admin_token(auth, state);
+  TwinService twin(config, twin::InstrumentProfile::load(config.profile));
+  use_calibrated_profile(*store, twin);
+  Hub hub;
+  AlertService alerts(*store, hub, parse_enum<Severity>(config.webhook_min_severity, "webhook.min_severity"));
+  Instrument instrument(config, *store, twin, alerts, hub);
+
+  auto telemetry = make_telemetry(config, *store, alerts, instrument);
+  RetentionKeeper retention(*store, config.retention_days, telemetry.archive != nullptr);
+  retention.start();
+  // Unhooks the publisher from the hub before it goes, however this scope is left.
+  struct Untap {
+    Hub& hub;
+    ~Untap() { hub.set_tap(nullptr); }
+  } untap{hub};
+  start_telemetry(telemetry, config, hub);
+
+  asio::io_context io;
+  IoThreads io_threads(io, config.io_threads);
+  // Declared before the pools that wait on it, so that it outlives them.
+  rpc::ClientGovernor governor({.busy_share = config.client_share_busy});
+  asio::thread_pool workers(config.rpc_threads);
+  // Control methods (pause, resume, cancel, reset) have threads of their own: a queue of
+  // exports on the workers cannot delay them.
+  asio::thread_pool control(2);
+  rpc::Dispatcher dispatcher = make_dispatcher(config, workers, control, governor);
+  dispatcher.set_principal_check([&auth](const Principal& p) { return auth.still_valid(p); });
+  dispatcher.set_inline_gate([&governor] { return governor.holding(); });
+
+  net::NetStats net_stats;
+  std::vector<std::shared_ptr<net::Listener>> listeners;
+  Services services{.config = config, .state_dir = state, .store = *store, .auth = auth, .hub = hub,
+                    .twin = twin, .alerts = alerts, .instrument = instrument, .dispatcher = &dispatcher,
+                    .started_at = utc::now(),
+                    .transport_stats = listener_stats(listeners),
+                    .net_stats = [&net_stats](JsonWriter& w) { net_stats.write(w); },
+                    .end_sessions_of = [&listeners](const std::string& name) {
+                      for (const auto& l : listeners) l->end_sessions_of(name);
+                    },
+                    .data_dir = config.twin_data_dir.empty() ? state / "data" : fs::path(config.twin_data_dir),
+                    .archive = telemetry.archive.get(),
+                    .mqtt = telemetry.mqtt.get(),
+                    .governor_stats = [&governor](JsonWriter& w) { governor.write_stats(w); }};
+  register_methods(dispatcher, services);
+
+  const net::Context ctx{dispatcher, hub,
+                         auth,       net::Limits::from(config),
+                         net_stats,  load_dashboard(config),
+                         [&io_threads] { return io_threads.next(); },
+                         net::make_tls_server(config)};
+  try {
+    open_listeners(io, config, state, ctx, listeners);
+  } catch (const Error& e) {
+    spdlog::critical("{}", e.what());
+    return exit_code::listen;
+  }
+  const auto endpoints = publish_endpoints(state, listeners);
+
+  if (!config.webhook_url.empty()) {
+    alerts.set_sink(net::make_webhook(io, config));
+    spdlog::info("alerts at or above {} are POSTed to {}", config.webhook_min_severity, config.webhook_url);
+  }
+
+  // ---- instrument (a bad driver table is a usage error)
+  std::optional<Diagnoser> diagnoser;
+  if (config.diagnose) {
+    diagnoser.emplace(*store, twin, alerts);
+    instrument.set_sustained_listener(
+        [&diagnoser](std::int64_t scan, std::int64_t alert) { diagnoser->request(scan, alert); });
+  }
+  if (opened.recover_later) instrument.recover_when_writable(kRecoverReason);
+  instrument.set_status_listener([](const std::string& s) {
+    sd_notifyf(0, "STATUS=%s", s.c_str());
+  });
+  try {
+    instrument.start();
+  } catch (const Error& e) {
+    spdlog::critical("{}", e.what());
+    for (auto& l : listeners) l->close();
+    return exit_code::usage;
+  }
+  audit_self(*store, "daemon.start", json{{"version", GONIO_VERSION_STRING}, {"listen", endpoints}});
+
+  // ---- signals, systemd
+  StopOnSignal stop(io, listeners, instrument);
+  ReloadOnSignal reload(io, ctx.tls);
+  std::signal(SIGPIPE, SIG_IGN);
+  Watchdog watchdog(io, config, instrument);
+  watchdog.start();
+  sd_notifyf(0, "READY=1\nSTATUS=ready, listening on %zu endpoint(s)\nMAINPID=%d", listeners.size(),
+             static_cast<int>(::getpid()));
+  spdlog::info("goniod {} ready (state dir {})", GONIO_VERSION_STRING, state.string());
+
+  io_threads.run();
+
+  // ---- shutdown
+  stop.join();
+  instrument.shutdown();
+  control.join();
+  governor.stop();  // client work it holds runs now, and the workers can finish
+  workers.join();
+  alerts.set_sink(nullptr);
+  hub.set_tap(nullptr);
+  if (telemetry.mqtt) telemetry.mqtt->stop();
+  if (telemetry.archive) telemetry.archive->stop();
+  audit_self(*store, "daemon.stop", json::object());
+  spdlog::info("goniod stopped cleanly");
+  return exit_code::ok;
+}
 
 }  // namespace
 
@@ -551,137 +591,9 @@ int run_daemon(const DaemonOptions& o) {
     spdlog::critical("{}", e.what());
     return exit_code::state;
   }
-  auto& store = opened.store;
 
   try {
-    Auth auth(config.tokens, *store);
-    write_admin_token(auth, state);
-    TwinService twin(config, twin::InstrumentProfile::load(config.profile));
-    use_calibrated_profile(*store, twin);
-    Hub hub;
-    AlertService alerts(*store, hub, parse_enum<Severity>(config.webhook_min_severity, "webhook.min_severity"));
-    Instrument instrument(config, *store, twin, alerts, hub);
-
-    auto telemetry = make_telemetry(config, *store, alerts, instrument);
-    RetentionKeeper retention(*store, config.retention_days, telemetry.archive != nullptr);
-    retention.start();
-    // Unhooks the publisher from the hub before it goes, however this scope is left.
-    struct Untap {
-      Hub& hub;
-      ~Untap() { hub.set_tap(nullptr); }
-    } untap{hub};
-    start_telemetry(telemetry, config, hub);
-
-    asio::io_context io;
-    IoThreads io_threads(io, config.io_threads);
-    // Declared before the pools that wait on it, so that it outlives them.
-    rpc::ClientGovernor governor({.busy_share = config.client_share_busy});
-    asio::thread_pool workers(config.rpc_threads);
-    // Control methods (pause, resume, cancel, reset) have threads of their own: a queue of
-    // exports on the workers cannot delay them.
-    asio::thread_pool control(2);
-    rpc::Dispatcher dispatcher([&workers, &governor](std::function<void()> f) {
-                                 asio::post(workers, [&governor, f = std::move(f)] {
-                                   yield_to_measurement();
-                                   // The governor counts the requests' own CPU, on these
-                                   // threads: not the io threads' reading, writing and
-                                   // notifications, which follow the measurement's pace.
-                                   thread_local const bool counted = (rpc::mark_client_thread(), true);
-                                   (void)counted;
-                                   governor.wait_turn();
-                                   f();
-                                 });
-                               },
-                               [&control](std::function<void()> f) { asio::post(control, std::move(f)); },
-                               dispatch_limits(config));
-    dispatcher.set_principal_check([&auth](const Principal& p) { return auth.still_valid(p); });
-    dispatcher.set_inline_gate([&governor] { return governor.holding(); });
-
-    net::NetStats net_stats;
-    std::vector<std::shared_ptr<net::Listener>> listeners;
-    Services services{config,     state,     *store,   auth,
-                      hub,        twin,      alerts,   instrument,
-                      &dispatcher, std::chrono::steady_clock::now(), utc::now(),
-                      [&listeners](JsonWriter& w) {
-                        for (const auto& l : listeners) {
-                          w.begin_object();
-                          l->write_stats(w);
-                          w.end_object();
-                        }
-                      },
-                      [&net_stats](JsonWriter& w) { net_stats.write(w); },
-                      [&listeners](const std::string& name) {
-                        for (const auto& l : listeners) l->end_sessions_of(name);
-                      },
-                      config.twin_data_dir.empty() ? state / "data" : fs::path(config.twin_data_dir),
-                      telemetry.archive.get(),
-                      telemetry.mqtt.get(),
-                      [&governor](JsonWriter& w) { governor.write_stats(w); }};
-    register_methods(dispatcher, services);
-
-    const net::Context ctx{dispatcher, hub,
-                           auth,       net::Limits::from(config),
-                           net_stats,  load_dashboard(config),
-                           [&io_threads] { return io_threads.next(); },
-                           net::make_tls_server(config)};
-    try {
-      open_listeners(io, config, state, ctx, listeners);
-    } catch (const Error& e) {
-      spdlog::critical("{}", e.what());
-      return exit_code::listen;
-    }
-    const auto endpoints = publish_endpoints(state, listeners);
-
-    if (!config.webhook_url.empty()) {
-      alerts.set_sink(net::make_webhook(io, config));
-      spdlog::info("alerts at or above {} are POSTed to {}", config.webhook_min_severity, config.webhook_url);
-    }
-
-    // ---- instrument (a bad driver table is a usage error)
-    std::optional<Diagnoser> diagnoser;
-    if (config.diagnose) {
-      diagnoser.emplace(*store, twin, alerts);
-      instrument.set_sustained_listener(
-          [&diagnoser](std::int64_t scan, std::int64_t alert) { diagnoser->request(scan, alert); });
-    }
-    if (opened.recover_later) instrument.recover_when_writable(kRecoverReason);
-    instrument.set_status_listener([](const std::string& s) {
-      sd_notifyf(0, "STATUS=%s", s.c_str());
-    });
-    try {
-      instrument.start();
-    } catch (const Error& e) {
-      spdlog::critical("{}", e.what());
-      for (auto& l : listeners) l->close();
-      return exit_code::usage;
-    }
-    audit_self(*store, "daemon.start", json{{"version", GONIO_VERSION_STRING}, {"listen", endpoints}});
-
-    // ---- signals, systemd
-    StopOnSignal stop(io, listeners, instrument);
-    ReloadOnSignal reload(io, ctx.tls);
-    std::signal(SIGPIPE, SIG_IGN);
-    Watchdog watchdog(io, config, instrument);
-    watchdog.start();
-    sd_notifyf(0, "READY=1\nSTATUS=ready, listening on %zu endpoint(s)\nMAINPID=%d", listeners.size(),
-               static_cast<int>(::getpid()));
-    spdlog::info("goniod {} ready (state dir {})", GONIO_VERSION_STRING, state.string());
-
-    io_threads.run();
-
-    // ---- shutdown
-    stop.join();
-    instrument.shutdown();
-    control.join();
-    governor.stop();  // client work it holds runs now, and the workers can finish
-    workers.join();
-    alerts.set_sink(nullptr);
-    hub.set_tap(nullptr);
-    if (telemetry.mqtt) telemetry.mqtt->stop();
-    if (telemetry.archive) telemetry.archive->stop();
-    audit_self(*store, "daemon.stop", json::object());
-    spdlog::info("goniod stopped cleanly");
-    return exit_code::ok;
+    return serve(config, state, opened);
   } catch (const Error& e) {
     spdlog::critical("{}", e.what());
     return e.code() == Errc::internal ? exit_code::internal
