@@ -6,10 +6,10 @@
 
 namespace gonio::daemon {
 
-const std::vector<std::string>& archive_migrations() {
-  static const std::vector<std::string> m = {
-      // 0 -> 1: the five tables keyed by instrument, the scan state history, the views.
-      R"sql(
+namespace {
+
+// 0 -> 1: the five tables keyed by instrument, the scan state history, the views.
+constexpr const char* kTo1 = R"sql(
 CREATE TABLE instruments (
   instrument text PRIMARY KEY,
   goniod_version text NOT NULL,
@@ -130,9 +130,10 @@ CREATE VIEW scan_summary AS
 -- Alerts nobody has acknowledged yet, on any instrument.
 CREATE VIEW open_alerts AS
   SELECT * FROM alerts WHERE NOT acknowledged;
-)sql",
-      // 1 -> 2: the integration time of each point (auto-ranging); null before it was kept.
-      R"sql(
+)sql";
+
+// 1 -> 2: the integration time of each point (auto-ranging); null before it was kept.
+constexpr const char* kTo2 = R"sql(
 ALTER TABLE points ADD COLUMN integration_ms double precision;
 CREATE OR REPLACE VIEW sample_points AS
   SELECT sm.name AS sample, p.instrument, p.scan_id, p.idx, p.theta_i, p.phi_i, p.theta_r,
@@ -141,16 +142,22 @@ CREATE OR REPLACE VIEW sample_points AS
     FROM points p
     JOIN scans s ON s.instrument = p.instrument AND s.scan_id = p.scan_id
     JOIN samples sm ON sm.instrument = s.instrument AND sm.sample_id = s.sample_id;
-)sql",
-      // 2 -> 3: an alert's resolution (a sustained divergence alert that its scan's final
-      // verdict no longer supports); open alerts are the unacknowledged ones still standing.
-      R"sql(
+)sql";
+
+// 2 -> 3: an alert's resolution (a sustained divergence alert that its scan's final
+// verdict no longer supports); open alerts are the unacknowledged ones still standing.
+constexpr const char* kTo3 = R"sql(
 ALTER TABLE alerts ADD COLUMN resolved_at timestamptz;
 ALTER TABLE alerts ADD COLUMN resolution text;
 CREATE OR REPLACE VIEW open_alerts AS
   SELECT * FROM alerts WHERE NOT acknowledged AND resolved_at IS NULL;
-)sql",
-  };
+)sql";
+
+}  // namespace
+
+// Migration i takes the schema from version i to i + 1.
+const std::vector<std::string>& archive_migrations() {
+  static const std::vector<std::string> m{kTo1, kTo2, kTo3};
   return m;
 }
 
