@@ -100,7 +100,7 @@ ColorCheck color_check(const Spectrum& m, const Spectrum& p, const std::vector<d
     c.difference = de.value;
     c.u = de.u;
     c.limit = s.delta_e_threshold;
-    c.decision = decision_text(decide(de.value, de.u, c.limit, s.coverage_k));
+    c.decision = to_text(decide(de.value, de.u, c.limit, s.coverage_k));
     return c;
   }
   // Above the diffuser's luminance: chromaticity and luminance apart.
@@ -120,26 +120,11 @@ ColorCheck color_check(const Spectrum& m, const Spectrum& p, const std::vector<d
   c.luminance_u = ratio.u;
   const auto d = worse(decide(duv.value, duv.u, c.limit, s.coverage_k),
                        decide(ratio.value - 1, ratio.u, tolerance, s.coverage_k));
-  c.decision = decision_text(d);
+  c.decision = to_text(d);
   return c;
 }
 
-Decision parse_decision(const std::string& s) {
-  if (s == "agrees") return Decision::agrees;
-  if (s == "out_of_tolerance") return Decision::out_of_tolerance;
-  return Decision::undecided;
-}
-
 }  // namespace
-
-const char* decision_text(Decision d) {
-  switch (d) {
-    case Decision::agrees: return "agrees";
-    case Decision::undecided: return "undecided";
-    case Decision::out_of_tolerance: return "out_of_tolerance";
-  }
-  return "undecided";
-}
 
 Decision worse(Decision a, Decision b) { return static_cast<int>(a) >= static_cast<int>(b) ? a : b; }
 
@@ -177,7 +162,7 @@ PointDivergence evaluate_point(const Spectrum& m, const Spectrum& p, const std::
   if (colorimeter) {
     d.color = color_check(m, p, u_model, budget, tolerance, *colorimeter, s);
     if (d.color->kind == "ciede2000") d.delta_e00 = d.color->difference;
-    d.decision = worse(d.decision, parse_decision(d.color->decision));
+    d.decision = worse(d.decision, from_text<Decision>(d.color->decision).value_or(Decision::undecided));
   }
   d.diverged = d.decision == Decision::out_of_tolerance;
   d.inconsistent = d.z_max > s.z_threshold;

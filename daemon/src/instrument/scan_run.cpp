@@ -262,7 +262,7 @@ void ScanRun::predict_and_judge(Point& pt) {
     p.z_max = d.z_max;
     p.delta_e00 = d.delta_e00;
     p.color = d.color;
-    p.decision = decision_text(d.decision);
+    p.decision = to_text(d.decision);
     p.diverged = d.diverged;
     if (d.inconsistent) p.flags.push_back("inconsistent");
   }
@@ -366,7 +366,7 @@ void ScanRun::end(ScanState state, const std::string& actor) {
 void ScanRun::judge(std::int64_t point_index, bool final) {
   if (evidence_.points() == 0) return;
   const auto v = evidence_.verdict();
-  const auto key = v.decision + "|" + (v.cause ? v.cause->parameter : std::string());
+  const auto key = std::string(to_text(v.decision)) + "|" + (v.cause ? v.cause->parameter : std::string());
   // Stored when it changes and at the end: scan.get shows the latest.
   if (key != verdict_stored_ || final) {
     try {

@@ -63,8 +63,8 @@ nlohmann::json ScanVerdict::to_json() const {
                             {"chi2_per_n", r.chi2_per_n},
                             {"mean_rel", r.mean_rel},
                             {"u", r.u},
-                            {"decision", decision_text(r.decision)}});
-  return nlohmann::json{{"decision", decision},
+                            {"decision", to_text(r.decision)}});
+  return nlohmann::json{{"decision", to_text(decision)},
                         {"summary", summary},
                         {"cause", cause_json(cause)},
                         {"calibration_hint", cause_json(calibration_hint)},
@@ -92,7 +92,7 @@ std::string short_text(Decision d) {
 }  // namespace
 
 // A candidate's own decision (for the named cause and for ties), and the sentence that says why.
-std::string ScanEvidence::decide_for(const Fitted& c, std::string& text) const {
+VerdictDecision ScanEvidence::decide_for(const Fitted& c, std::string& text) const {
   const auto cause = cause_of(c);
   if (cause.kind == "instrument") {
     const auto& col = names_[c.column];
@@ -100,13 +100,13 @@ std::string ScanEvidence::decide_for(const Fitted& c, std::string& text) const {
     if (off - k_ * cause.u > col.limit) {
       text = fmt::format("the instrument is outside its datasheet: {} (stated ±{:.3g}{})", describe(cause),
                          col.limit, col.unit == "deg" ? "°" : "");
-      return "instrument_out_of_spec";
+      return VerdictDecision::instrument_out_of_spec;
     }
     const auto b = band_decision(c.fit);
     text = fmt::format("{} within the datasheet explains the points; with it removed the sample is {} "
                        "(worst band {:+.2f} ± {:.2f} %, tolerance {})",
                        describe(cause), in_words(b.decision), 100 * b.worst_rel, 100 * b.worst_u, tolerance_text());
-    return decision_text(b.decision);
+    return verdict_decision(b.decision);
   }
   std::size_t out_points = 0;
   const auto d = effect_decision(c, out_points);
@@ -116,7 +116,7 @@ std::string ScanEvidence::decide_for(const Fitted& c, std::string& text) const {
                                        points_)
                      : d == Decision::agrees ? fmt::format("within the tolerance {} at every point", tolerance_text())
                                              : fmt::format("not decidable against the tolerance {}", tolerance_text()));
-  return decision_text(d);
+  return verdict_decision(d);
 }
 
 // No candidate explains the residuals: no cause is named. The scan is judged on the bands and
@@ -140,7 +140,7 @@ void ScanEvidence::unexplained(ScanVerdict& v, const Fit& fit, const std::string
     where += fmt::format("{}θi {:g}°, aspecular {:g}…{:g}°: {:+.2f} ± {:.2f} % (χ²/n {:.3g})", where.empty() ? "" : "; ",
                          r.theta_i, r.aspecular_lo, r.aspecular_hi, 100 * r.mean_rel, 100 * r.u, r.chi2_per_n);
   v.regions = std::move(regions);
-  v.decision = decision_text(d);
+  v.decision = verdict_decision(d);
   v.summary = fmt::format("{}: the sample does not match its catalogue; no single parameter explains it ({}; χ²/dof "
                           "{:.3g}, p = {:.2g}); worst regions: {}; {} of {} points out of tolerance on their own "
                           "(tolerance {})",
@@ -161,7 +161,7 @@ void ScanEvidence::name_scatter(ScanVerdict& v, const Fit& h0, const Scatter& s)
   v.explained = true;
   v.chi2_per_dof = h0.chi2 / dof(0);
   v.p_value = chi2_p_value(h0.chi2, dof(0));
-  v.decision = decision_text(b.decision);
+  v.decision = verdict_decision(b.decision);
   v.summary = fmt::format("{}: the residuals are random from point to point (lag-1 ρ {:.2f}): {} — a calibration "
                           "hint, not the sample; with it in the uncertainty the sample is {} (worst band {:+.2f} ± "
                           "{:.2f} %, tolerance {})",
@@ -202,7 +202,7 @@ ScanVerdict ScanEvidence::verdict() const {
       name_scatter(v, h0, scatter);
     } else if (early || h0_consistent) {
       const auto b = band_decision(h0);
-      v.decision = decision_text(b.decision);
+      v.decision = verdict_decision(b.decision);
       v.explained = h0_consistent;
       v.summary = fmt::format("{} over {} points: the worst band differs by {:+.2f} ± {:.2f} % (tolerance {}); {} (χ²/dof {:.3g})",
                               short_text(b.decision), points_, 100 * b.worst_rel, 100 * b.worst_u, tolerance_text(),
@@ -238,29 +238,29 @@ ScanVerdict ScanEvidence::verdict() const {
     // The points cannot tell these apart: no cause is named. When every one of them alerts,
     // the measurement is out of tolerance whichever it is.
     std::string names = describe(cause_of(best));
-    bool same = true, all_alert = v.decision == "out_of_tolerance" || v.decision == "instrument_out_of_spec";
+    bool same = true, all_alert = v.alerts();
     for (const auto* t : tied) {
       std::string other;
       const auto d = decide_for(*t, other);
       same = same && d == v.decision;
-      all_alert = all_alert && (d == "out_of_tolerance" || d == "instrument_out_of_spec");
+      all_alert = all_alert && alerts(d);
       v.alike.push_back(cause_of(*t));
       names += " or " + describe(v.alike.back());
     }
     v.alike.insert(v.alike.begin(), cause_of(best));
-    if (!same) v.decision = all_alert ? "out_of_tolerance" : "undecided";
+    if (!same) v.decision = all_alert ? VerdictDecision::out_of_tolerance : VerdictDecision::undecided;
     v.summary = fmt::format("{}: the twin disagrees (χ²/dof {:.3g} → {:.3g}) but the points cannot tell {} "
                             "apart (undetermined cause)",
-                            v.decision, h0.chi2 / dof(0), v.chi2_per_dof, names);
+                            to_text(v.decision), h0.chi2 / dof(0), v.chi2_per_dof, names);
     return v;
   }
   v.cause = cause_of(best);
-  if (v.cause->kind == "instrument" && v.decision != "instrument_out_of_spec" &&
+  if (v.cause->kind == "instrument" && v.decision != VerdictDecision::instrument_out_of_spec &&
       std::abs(v.cause->value - v.cause->nominal) - k_ * v.cause->u > 0) {
     v.calibration_hint = v.cause;
     v.cause.reset();  // an in-spec input is not what is wrong with the scan
   }
-  v.summary = fmt::format("{}: {} (χ²/dof {:.3g} → {:.3g}, Δχ² {:.3g} over the next candidate)", v.decision, text,
+  v.summary = fmt::format("{}: {} (χ²/dof {:.3g} → {:.3g}, Δχ² {:.3g} over the next candidate)", to_text(v.decision), text,
                           h0.chi2 / dof(0), v.chi2_per_dof, v.delta_chi2_next);
   return v;
 }

@@ -59,7 +59,7 @@ TEST(SustainedResolution, OnlyAVerdictThatNoLongerAlertsResolves) {
   // The same line as the verdict's own: a decision resolves exactly when it does not alert.
   for (const char* d : {"agrees", "undecided", "out_of_tolerance", "instrument_out_of_spec"}) {
     ScanVerdict v;
-    v.decision = d;
+    v.decision = parse_enum<VerdictDecision>(d, "decision");
     EXPECT_EQ(sustained_resolution(d, "s").has_value(), !v.alerts()) << d;
   }
 }

@@ -91,7 +91,7 @@ TEST(Verdict, AnInSpecArmOffsetIsNoAlarmButACalibrationHint) {
 TEST(Verdict, AnAlbedoBandTwiceItsToleranceIsOutOfToleranceAndNamed) {
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
     const auto v = judge(scan({.albedo_600 = 0.45 * 0.04}, 61, seed));
-    EXPECT_EQ(v.decision, "out_of_tolerance") << v.summary;
+    EXPECT_EQ(v.decision, VerdictDecision::out_of_tolerance) << v.summary;
     ASSERT_TRUE(v.cause.has_value()) << v.summary;
     EXPECT_EQ(v.cause->kind, "sample");
     EXPECT_EQ(v.cause->parameter, "lambert.albedo@600");
@@ -126,12 +126,12 @@ TEST(Verdict, ASampleCauseIsJudgedAtEveryPointAsTheRuleWould) {
 
 TEST(Verdict, AnArmOffsetBeyondTheDatasheetIsTheInstrument) {
   const auto v = judge(scan({.receive_offset = 1.5}, 61, 3));
-  EXPECT_EQ(v.decision, "instrument_out_of_spec") << v.summary;
+  EXPECT_EQ(v.decision, VerdictDecision::instrument_out_of_spec) << v.summary;
   ASSERT_TRUE(v.cause.has_value());
   EXPECT_EQ(v.cause->parameter, "receive_arm_deg");
   EXPECT_NEAR(v.cause->value, 1.5, 0.05);
   const auto g = judge(scan({.gain = 0.05}, 61, 4));
-  EXPECT_EQ(g.decision, "instrument_out_of_spec") << g.summary;
+  EXPECT_EQ(g.decision, VerdictDecision::instrument_out_of_spec) << g.summary;
   ASSERT_TRUE(g.cause.has_value());
   EXPECT_EQ(g.cause->parameter, "gain");
   EXPECT_NEAR(g.cause->value, 1.05, 0.005);
@@ -153,7 +153,7 @@ TEST(Verdict, ALargeArmOffsetIsNamedDespiteItsTaylorRemainderButNotBeyondIt) {
   const auto near = with_remainder(0.05);
   ASSERT_TRUE(near.cause.has_value()) << near.summary;
   EXPECT_EQ(near.cause->parameter, "receive_arm_deg");
-  EXPECT_EQ(near.decision, "instrument_out_of_spec") << near.summary;
+  EXPECT_EQ(near.decision, VerdictDecision::instrument_out_of_spec) << near.summary;
   EXPECT_TRUE(near.explained);
   const auto far = with_remainder(0.6);
   EXPECT_FALSE(far.cause.has_value()) << far.summary;
@@ -173,13 +173,13 @@ TEST(Verdict, NeverFromTheFirstPointsAlone) {
     e.add(points[static_cast<std::size_t>(i)]);
     const auto v = e.verdict();
     if (i < 2) {
-      EXPECT_EQ(v.decision, "undecided");
+      EXPECT_EQ(v.decision, VerdictDecision::undecided);
     }
     EXPECT_FALSE(v.cause.has_value()) << v.summary;
   }
   e.add(points[9]);
   const auto v = e.verdict();
-  EXPECT_EQ(v.decision, "instrument_out_of_spec") << v.summary;
+  EXPECT_EQ(v.decision, VerdictDecision::instrument_out_of_spec) << v.summary;
   ASSERT_TRUE(v.cause.has_value()) << v.summary;
   EXPECT_EQ(v.cause->parameter, "receive_arm_deg");
 }
@@ -194,7 +194,7 @@ TEST(Verdict, AFarExtrapolationIsNoCause) {
     for (auto& x : p.sample_sensitivity[1].sensitivity) x *= 1e-3;
   }
   const auto v = judge(points);
-  EXPECT_EQ(v.decision, "instrument_out_of_spec") << v.summary;
+  EXPECT_EQ(v.decision, VerdictDecision::instrument_out_of_spec) << v.summary;
   ASSERT_TRUE(v.cause.has_value()) << v.summary;
   EXPECT_EQ(v.cause->parameter, "gain");
 }
@@ -211,7 +211,7 @@ TEST(Verdict, CandidatesThePointsCannotTellApartNameNoCause) {
 
 TEST(Verdict, AgreesWhenNothingDiffers) {
   const auto v = judge(scan({}, 61, 8), 0.05);
-  EXPECT_EQ(v.decision, "agrees") << v.summary;
+  EXPECT_EQ(v.decision, VerdictDecision::agrees) << v.summary;
   EXPECT_LT(v.chi2_per_dof, 2);
   const auto j = v.to_json();
   EXPECT_EQ(j["cause"], nullptr);
@@ -261,7 +261,7 @@ TEST(Verdict, ANamedCauseLeavesAChi2ConsistentWithItsDegreesOfFreedom) {
 TEST(Verdict, NodesMovingTogetherAreNamedAsTheirBandWithItsSign) {
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
     const auto v = judge(spectral({0, 0.04, 0.04}, seed));
-    EXPECT_EQ(v.decision, "out_of_tolerance") << v.summary;
+    EXPECT_EQ(v.decision, VerdictDecision::out_of_tolerance) << v.summary;
     ASSERT_TRUE(v.cause.has_value()) << v.summary;
     EXPECT_EQ(v.cause->parameter, "lambert.albedo@550-650");
     ASSERT_TRUE(v.cause->band_nm.has_value());
@@ -303,7 +303,7 @@ std::vector<PointRecord> master(const std::array<double, 3>& change, std::uint64
 TEST(Verdict, AMasterScaledInOneBandIsNamedAsThatBandOfTheCatalogue) {
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
     const auto v = judge(master({0, 0, 0.05}, seed));
-    EXPECT_EQ(v.decision, "out_of_tolerance") << v.summary;
+    EXPECT_EQ(v.decision, VerdictDecision::out_of_tolerance) << v.summary;
     ASSERT_TRUE(v.cause.has_value()) << v.summary;
     EXPECT_EQ(v.cause->parameter, "catalogue@650-650");
     EXPECT_NEAR(v.cause->value, 1.05, 3 * v.cause->u + 1e-9) << v.summary;
@@ -332,7 +332,7 @@ TEST(Verdict, AMisfitNoParameterExplainsNamesNoCauseAndItsRegions) {
   EXPECT_FALSE(v.cause.has_value()) << v.summary;
   EXPECT_FALSE(v.explained);
   EXPECT_LT(v.p_value, ScanEvidence::kConsistent);
-  EXPECT_EQ(v.decision, "out_of_tolerance") << v.summary;
+  EXPECT_EQ(v.decision, VerdictDecision::out_of_tolerance) << v.summary;
   ASSERT_FALSE(v.regions.empty());
   // Points 40–44 lie at θr 45 + 10·x, x = −2 + 4i/60: aspecular −8.7…−6.0°, the bin −10…0°.
   EXPECT_EQ(v.regions.front().aspecular_lo, -10);

@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "gonio/proto/enum_text.hpp"
 #include "gonio/proto/point.hpp"
 #include "gonio/proto/spectrum.hpp"
 #include "gonio/twin/color.hpp"
@@ -39,8 +40,14 @@ struct DivergenceSettings {
   double reference_drift = 0.05;
 };
 
+// Ordered from best to worst (worse() compares them); named as points and verdicts spell them.
 enum class Decision { agrees, undecided, out_of_tolerance };
-const char* decision_text(Decision d);
+inline constexpr EnumNames<Decision, 3> kDecisionNames{{
+    {Decision::agrees, "agrees"},
+    {Decision::undecided, "undecided"},
+    {Decision::out_of_tolerance, "out_of_tolerance"},
+}};
+constexpr const auto& enum_names(Decision) { return kDecisionNames; }  // proto/enum_text.hpp
 // The worse of two decisions (out_of_tolerance > undecided > agrees).
 Decision worse(Decision a, Decision b);
 // The rule itself for a difference d with standard uncertainty u against the limit T.

@@ -77,8 +77,29 @@ struct MisfitRegion {
   Decision decision = Decision::agrees;
 };
 
+// The scan's decision: the rule's three (Decision, with the same values) and the instrument
+// outside its datasheet.
+enum class VerdictDecision {
+  agrees = static_cast<int>(Decision::agrees),
+  undecided = static_cast<int>(Decision::undecided),
+  out_of_tolerance = static_cast<int>(Decision::out_of_tolerance),
+  instrument_out_of_spec,
+};
+inline constexpr EnumNames<VerdictDecision, 4> kVerdictDecisionNames{{
+    {VerdictDecision::agrees, "agrees"},
+    {VerdictDecision::undecided, "undecided"},
+    {VerdictDecision::out_of_tolerance, "out_of_tolerance"},
+    {VerdictDecision::instrument_out_of_spec, "instrument_out_of_spec"},
+}};
+constexpr const auto& enum_names(VerdictDecision) { return kVerdictDecisionNames; }  // proto/enum_text.hpp
+constexpr VerdictDecision verdict_decision(Decision d) { return static_cast<VerdictDecision>(d); }
+// Whether a decision raises the scan's sustained-divergence alert.
+constexpr bool alerts(VerdictDecision d) {
+  return d == VerdictDecision::out_of_tolerance || d == VerdictDecision::instrument_out_of_spec;
+}
+
 struct ScanVerdict {
-  std::string decision = "undecided";  // agrees | out_of_tolerance | undecided | instrument_out_of_spec
+  VerdictDecision decision = VerdictDecision::undecided;
   std::string summary;
   std::optional<VerdictCause> cause;
   std::optional<VerdictCause> calibration_hint;  // an in-spec instrument input worth calibrating
@@ -97,7 +118,7 @@ struct ScanVerdict {
   std::vector<Candidate> candidates;   // every candidate within its linear range, best first
   std::vector<MisfitRegion> regions;   // the worst regions when nothing explains the residuals
 
-  bool alerts() const { return decision == "out_of_tolerance" || decision == "instrument_out_of_spec"; }
+  bool alerts() const { return daemon::alerts(decision); }
   nlohmann::json to_json() const;
 };
 
@@ -203,7 +224,7 @@ class ScanEvidence {
   Scatter scatter_of(const Fit& fit) const;
   double truncation_chi2(const Fitted& c) const;
   Decision effect_decision(const Fitted& c, std::size_t& out_points) const;
-  std::string decide_for(const Fitted& c, std::string& text) const;
+  VerdictDecision decide_for(const Fitted& c, std::string& text) const;
   std::string tolerance_text() const;
   void setup(const PointRecord& p);
   void add_bands(const WavelengthGrid& wavelengths);
