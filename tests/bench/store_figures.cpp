@@ -83,7 +83,7 @@ std::int64_t measure_scan(Store& s, std::int64_t sample, std::size_t n) {
   s.set_scan_state(sc.id, ScanState::running, "", "bench");
   for (std::size_t i = 0; i < n; ++i) s.insert_point(make_point(sc.id, static_cast<std::int64_t>(i)));
   s.set_scan_state(sc.id, ScanState::completed, "", "bench");
-  s.insert_fit(sc.id, "verdict", "", nlohmann::json{{"consistent", true}}, "goniod");
+  s.insert_fit(sc.id, FitKind::verdict, "", nlohmann::json{{"consistent", true}}, "goniod");
   return sc.id;
 }
 

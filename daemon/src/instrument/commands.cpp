@@ -55,7 +55,7 @@ Scan Instrument::transition(std::int64_t id, ScanState to, const std::string& re
 // raised again would page people twice for one scan (docs/decision-rule.md).
 void Instrument::resolve_unsupported_alerts(std::int64_t scan) {
   try {
-    const auto fit = store_.latest_fit(scan, "verdict");
+    const auto fit = store_.latest_fit(scan, FitKind::verdict);
     if (!fit || !fit->result.is_object()) return;
     const auto decision = fit->result.value("decision", std::string());
     if (decision.empty()) return;

@@ -90,7 +90,7 @@ void Diagnoser::diagnose(const Job& job) {
   const auto scan = store_.scan(job.scan_id);
   if (!scan) return;
   const auto sample = store_.sample(scan->plan.sample_id);
-  const auto verdict = store_.latest_fit(job.scan_id, "verdict");
+  const auto verdict = store_.latest_fit(job.scan_id, FitKind::verdict);
   if (!sample || !sample->spec.bsdf || !verdict) return;
   const auto& cause = verdict->result.contains("cause") ? verdict->result["cause"] : json(nullptr);
   if (!cause.is_object()) return;  // no cause named: nothing to refit
@@ -132,7 +132,7 @@ void Diagnoser::diagnose(const Job& job) {
       p.name, p.value, p.u, data.points.size(), f.chi2_per_dof, f.converged ? "" : ", not converged",
       p.at_bound ? ", on its bound" : "");
   json result{{"summary", text}, {"cause", cause}, {"fit", f.to_json()}};
-  store_.insert_fit(job.scan_id, "diagnosis", model, result, "goniod");
+  store_.insert_fit(job.scan_id, FitKind::diagnosis, model, result, "goniod");
   alerts_.annotate(job.alert_id, text);
 }
 

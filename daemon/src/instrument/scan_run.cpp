@@ -73,7 +73,7 @@ ScanRun::ScanRun(const RunContext& ctx, const Scan& scan, std::optional<Geometry
       evidence_.add(p);
       if (scan.plan.adaptive) stored.push_back(std::move(p));
     }
-  if (const auto last = store.latest_fit(scan.id, "verdict")) {
+  if (const auto last = store.latest_fit(scan.id, FitKind::verdict)) {
     const auto& v = last->result;
     verdict_stored_ = v.value("decision", "") + "|" + (v.contains("cause") && v["cause"].is_object() ? v["cause"].value("parameter", "") : "");
     sustained_raised_ = v.value("decision", "") == "out_of_tolerance" || v.value("decision", "") == "instrument_out_of_spec";
@@ -334,7 +334,7 @@ std::string ScanRun::complete() {
   auto j = st.to_json();
   set_adaptive_status(j);
   try {
-    ctx_.store.insert_fit(scan_.id, "adaptive", plan_model(scan_.plan), j, "goniod");
+    ctx_.store.insert_fit(scan_.id, FitKind::adaptive, plan_model(scan_.plan), j, "goniod");
   } catch (const Error& e) {
     spdlog::warn("scan {}: cannot store the adaptive loop's state: {}", scan_.id, e.what());
   }
@@ -346,7 +346,7 @@ void ScanRun::end(ScanState state, const std::string& actor) {
   if (adaptive_ && state != ScanState::completed) {
     // Paused, interrupted, failed or cancelled: scan.get shows the loop as it stopped.
     try {
-      ctx_.store.insert_fit(scan_.id, "adaptive", plan_model(scan_.plan), adaptive_->status().to_json(), actor);
+      ctx_.store.insert_fit(scan_.id, FitKind::adaptive, plan_model(scan_.plan), adaptive_->status().to_json(), actor);
     } catch (const Error& e) {
       spdlog::warn("scan {}: cannot store the adaptive loop's state: {}", scan_.id, e.what());
     }
@@ -356,7 +356,7 @@ void ScanRun::end(ScanState state, const std::string& actor) {
   // its sustained alert (Instrument::transition()).
   if ((state == ScanState::cancelled || state == ScanState::failed) && evidence_.points() > 0) {
     try {
-      ctx_.store.insert_fit(scan_.id, "verdict", spec_, evidence_.verdict().to_json(), "goniod");
+      ctx_.store.insert_fit(scan_.id, FitKind::verdict, spec_, evidence_.verdict().to_json(), "goniod");
     } catch (const std::exception& e) {
       spdlog::warn("scan {}: cannot store the verdict: {}", scan_.id, e.what());
     }
@@ -370,7 +370,7 @@ void ScanRun::judge(std::int64_t point_index, bool final) {
   // Stored when it changes and at the end: scan.get shows the latest.
   if (key != verdict_stored_ || final) {
     try {
-      ctx_.store.insert_fit(scan_.id, "verdict", spec_, v.to_json(), "goniod");
+      ctx_.store.insert_fit(scan_.id, FitKind::verdict, spec_, v.to_json(), "goniod");
       verdict_stored_ = key;
     } catch (const Error& e) {
       spdlog::warn("scan {}: cannot store the verdict: {}", scan_.id, e.what());

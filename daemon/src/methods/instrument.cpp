@@ -140,7 +140,7 @@ void register_instrument(MethodRegistrar& reg, Services& s) {
     const auto result = methods::with_field("sample", [&] {
       return twin::calibrate(data, *sample, parameters, profile, options);
     });
-    const auto stored = s.store.insert_fit(id, "calibrate", *sample, result.to_json(), actor(c));
+    const auto stored = s.store.insert_fit(id, FitKind::calibrate, *sample, result.to_json(), actor(c));
     json out = methods::fit_json(stored);
     out["scan"] = id;
     auto reason = dry_run ? std::string("dry run") : not_applicable(result);

@@ -49,7 +49,7 @@ Error renamed(const Error& e, const std::string& field) {
 
 json fit_json(const StoredFit& f) {
   return json{{"id", f.id},
-              {"kind", f.kind},
+              {"kind", to_text(f.kind)},
               {"model", f.model},
               {"created_by", f.created_by},
               {"created_at", f.created_at},

@@ -24,7 +24,7 @@ constexpr std::size_t kFitsSearched = 1000;
 
 StoredFit find_fit(const Store& store, std::int64_t scan, std::optional<std::int64_t> id) {
   for (const auto& f : store.fits(scan, kFitsSearched)) {
-    if (f.kind != "fit") continue;
+    if (f.kind != FitKind::fit) continue;
     if (!id || f.id == *id) return f;
   }
   if (id) throw Error::not_found("fit", fmt::format("scan {} has no fit {}", scan, *id));

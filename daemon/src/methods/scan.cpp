@@ -104,14 +104,14 @@ rpc::Result scan_get(Services& s, rpc::Call& c) {
   json fits = json::array();
   for (const auto& f : s.store.fits(id, methods::kFitsShown)) fits.push_back(methods::fit_json(f));
   out["fits"] = std::move(fits);
-  const auto verdict = s.store.latest_fit(id, "verdict");
+  const auto verdict = s.store.latest_fit(id, FitKind::verdict);
   out["verdict"] = verdict ? verdict->result : json(nullptr);
   const auto pruned = s.store.points_pruned_at(id);
   out["points_pruned_at"] = pruned ? json(*pruned) : json(nullptr);
   // An adaptive scan's loop: live while it runs, else as stored when it last stopped.
   if (out["plan"].contains("adaptive")) {
     if (auto live = s.instrument.adaptive_status(id)) out["adaptive"] = std::move(*live);
-    else if (const auto last = s.store.latest_fit(id, "adaptive")) out["adaptive"] = last->result;
+    else if (const auto last = s.store.latest_fit(id, FitKind::adaptive)) out["adaptive"] = last->result;
     else out["adaptive"] = json(nullptr);
   }
   return out;
@@ -246,7 +246,7 @@ rpc::Result scan_fit(Services& s, rpc::Call& c) {
   const auto profile = s.twin.profile();
   const auto result = methods::with_field(
       "model", [&] { return twin::fit_material(data, model, profile, options); });
-  const auto stored = s.store.insert_fit(id, "fit", model, result.to_json(), actor(c));
+  const auto stored = s.store.insert_fit(id, FitKind::fit, model, result.to_json(), actor(c));
   spdlog::info("scan {} fitted by {}: '{}' -> '{}', chi2/dof {:.3g}, {} evaluations, {:.1f} s",
                id, actor(c), model, result.spec, result.chi2_per_dof, result.evaluations,
                result.seconds);

@@ -17,7 +17,12 @@ StoredFit read_fit(const db::Stmt& s) {
   StoredFit f;
   f.id = s.i64(0);
   f.scan_id = s.i64(1);
-  f.kind = s.text(2);
+  const auto kind = s.text(2);
+  if (const auto k = from_text<FitKind>(kind)) {
+    f.kind = *k;
+  } else {
+    throw Error(Errc::internal, fmt::format("store: fit {} has the unknown kind '{}'", f.id, kind));
+  }
   f.model = s.text(3);
   f.created_by = s.text(4);
   f.created_at = s.text(5);
@@ -50,16 +55,16 @@ StoredProfile read_profile(const db::Stmt& s) {
 }
 
 // The audit action a stored record of `kind` is logged as.
-const char* fit_action(const std::string& kind) {
-  return kind == "calibrate"   ? "instrument.calibrate"
-         : kind == "diagnosis" ? "divergence.diagnose"
-         : kind == "verdict"   ? "scan.verdict"
-                               : "scan.fit";
+const char* fit_action(FitKind kind) {
+  return kind == FitKind::calibrate   ? "instrument.calibrate"
+         : kind == FitKind::diagnosis ? "divergence.diagnose"
+         : kind == FitKind::verdict   ? "scan.verdict"
+                                      : "scan.fit";
 }
 
 }  // namespace
 
-StoredFit Store::insert_fit(std::int64_t scan_id, const std::string& kind, const std::string& model,
+StoredFit Store::insert_fit(std::int64_t scan_id, FitKind kind, const std::string& model,
                             const json& result, const std::string& actor) {
   StoredFit f;
   f.scan_id = scan_id;
@@ -73,7 +78,7 @@ StoredFit Store::insert_fit(std::int64_t scan_id, const std::string& kind, const
   db::execute(*writer_,
               "INSERT INTO fits(scan_id, kind, model, created_by, created_at, result) "
               "VALUES (?, ?, ?, ?, ?, ?)",
-              scan_id, kind, model, actor, f.created_at, result.dump());
+              scan_id, std::string(to_text(kind)), model, actor, f.created_at, result.dump());
   f.id = writer_->last_insert_id();
   db::audit_in(*writer_, actor, fit_action(kind), fmt::format("scan:{}", scan_id),
                json{{"fit", f.id}, {"model", model}});
@@ -90,13 +95,13 @@ std::vector<StoredFit> Store::fits(std::int64_t scan_id, std::size_t limit) cons
                    read_fit, scan_id, limit);
 }
 
-std::optional<StoredFit> Store::latest_fit(std::int64_t scan_id, const std::string& kind) const {
+std::optional<StoredFit> Store::latest_fit(std::int64_t scan_id, FitKind kind) const {
   auto c = read();
   return db::query_one(
       *c,
       fmt::format("SELECT {} FROM fits WHERE scan_id = ? AND kind = ? ORDER BY id DESC LIMIT 1",
                   kFitColumns),
-      read_fit, scan_id, kind);
+      read_fit, scan_id, std::string(to_text(kind)));
 }
 
 StoredProfile Store::insert_profile(const std::string& name, const json& profile,

@@ -59,7 +59,7 @@ class RetentionTest : public ::testing::Test {
       s.insert_point(r);
     }
     if (final_state != ScanState::running) s.set_scan_state(sc.id, final_state, "", "test");
-    s.insert_fit(sc.id, "verdict", "", json{{"consistent", true}}, "goniod");
+    s.insert_fit(sc.id, FitKind::verdict, "", json{{"consistent", true}}, "goniod");
     return sc.id;
   }
   // What the archive shipper does once PostgreSQL has committed: the outbox rows up to and
@@ -112,7 +112,7 @@ TEST_F(RetentionTest, PrunesOnlyFinishedScansTheArchiveCommittedKeepingSummaries
   ASSERT_TRUE(kept);
   EXPECT_EQ(kept->points_done, 400u);  // the summary stays
   EXPECT_EQ(kept->state, ScanState::completed);
-  EXPECT_TRUE(s.latest_fit(shipped, "verdict"));
+  EXPECT_TRUE(s.latest_fit(shipped, FitKind::verdict));
   EXPECT_EQ(s.point_count(waiting), 40u);
   EXPECT_FALSE(s.points_pruned_at(waiting));
   EXPECT_EQ(s.point_count(running), 10u);

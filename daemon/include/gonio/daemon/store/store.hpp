@@ -64,11 +64,24 @@ struct AlertDraft {
   std::string message;
 };
 
+// What a stored fit record is: a material fit (scan.fit), an instrument calibration, a
+// divergence diagnosis, the scan's verdict (verdict.hpp) or an adaptive scan's last design
+// status (twin/design.hpp). Stored and sent as its name.
+enum class FitKind { fit, calibrate, diagnosis, verdict, adaptive };
+inline constexpr EnumNames<FitKind, 5> kFitKindNames{{
+    {FitKind::fit, "fit"},
+    {FitKind::calibrate, "calibrate"},
+    {FitKind::diagnosis, "diagnosis"},
+    {FitKind::verdict, "verdict"},
+    {FitKind::adaptive, "adaptive"},
+}};
+constexpr const auto& enum_names(FitKind) { return kFitKindNames; }  // proto/enum_text.hpp
+
 // A result of the inverse twin kept with its scan (scan.fit, instrument.calibrate).
 struct StoredFit {
   std::int64_t id = 0;
   std::int64_t scan_id = 0;
-  std::string kind;   // "fit", "calibrate", "diagnosis" or "verdict" (the scan's, verdict.hpp)
+  FitKind kind = FitKind::fit;
   std::string model;  // the model spec (fit) or the known sample's spec (calibrate)
   std::string created_by, created_at;
   nlohmann::json result;  // gonio::twin::FitResult::to_json()
@@ -205,12 +218,12 @@ class Store {
   Alert resolve_alert(std::int64_t id, const std::string& resolution, bool* changed = nullptr);
 
   // ---- fits and profiles
-  StoredFit insert_fit(std::int64_t scan_id, const std::string& kind, const std::string& model,
+  StoredFit insert_fit(std::int64_t scan_id, FitKind kind, const std::string& model,
                        const nlohmann::json& result, const std::string& actor);
-  // The scan's fits, newest first (its verdicts are not fits: latest_fit(id, "verdict")).
+  // The scan's fits, newest first (its verdicts are not fits: latest_fit(id, FitKind::verdict)).
   std::vector<StoredFit> fits(std::int64_t scan_id, std::size_t limit) const;
-  // The newest record of `kind` ("verdict", "diagnosis", ...) of a scan.
-  std::optional<StoredFit> latest_fit(std::int64_t scan_id, const std::string& kind) const;
+  // The newest record of `kind` of a scan.
+  std::optional<StoredFit> latest_fit(std::int64_t scan_id, FitKind kind) const;
   // Stores `profile` as the next version (audited).
   StoredProfile insert_profile(const std::string& name, const nlohmann::json& profile,
                                std::optional<std::int64_t> scan_id,
