@@ -584,6 +584,17 @@ json measure_control(Client& admin, const std::string& uri, const std::string& t
   std::atomic<bool> stop{false};
   std::atomic<std::size_t> exports{0};
   std::vector<std::thread> viewers;
+  // The viewers stop and are joined however this ends: a technician's call that times out
+  // throws, and a joinable thread destroyed would end the tool without saying why.
+  struct Joiner {
+    std::atomic<bool>& stop;
+    std::vector<std::thread>& ts;
+    ~Joiner() {
+      stop = true;
+      for (auto& t : ts)
+        if (t.joinable()) t.join();
+    }
+  } joiner{stop, viewers};
   for (int i = 0; i < 32; ++i)
     viewers.emplace_back([&] {
       try {
@@ -612,6 +623,7 @@ json measure_control(Client& admin, const std::string& uri, const std::string& t
   }
   stop = true;
   for (auto& t : viewers) t.join();
+  viewers.clear();
   return json{{"viewers", 32}, {"exports", exports.load()}, {"pauses", pause_ms.size()},
               {"pause_p50_ms", quantile(pause_ms, 0.5)},
               {"pause_p99_ms", quantile(pause_ms, 0.99)},
