@@ -63,6 +63,10 @@ void add_calibrate(CLI::App& app) {
         plot_fit(o->plot, correct(data, r.spec, *r.profile, high),
                  fmt::format("calibration on {}", r.spec), r);
       }
+      // What was written and how big; beside --json's document, not in it.
+      auto& said = o->json ? std::cerr : std::cout;
+      for (const auto* path : {profile_out.get(), &o->plot})
+        if (!path->empty()) said << fmt::format("wrote {} ({})\n", *path, file_size_text(*path));
       return kExitOk;
     });
   });

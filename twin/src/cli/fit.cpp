@@ -325,6 +325,10 @@ void add_fit(CLI::App& app) {
         if (!corrected->empty()) write_corrected(*corrected, points, data.wavelengths, r.spec);
         if (!o->plot.empty()) plot_fit(o->plot, points, "fit of " + *model, r);
       }
+      // What was written and how big; beside --json's document, not in it.
+      auto& said = o->json ? std::cerr : std::cout;
+      for (const auto* path : {corrected.get(), &o->plot})
+        if (!path->empty()) said << fmt::format("wrote {} ({})\n", *path, file_size_text(*path));
       return kExitOk;
     });
   });
