@@ -27,6 +27,7 @@ struct DesignCliOptions {
   double tolerance = 0.01;
   int max_points = 50;
   double noise_rel = 0.005, noise_abs = 0.0005;
+  std::string noise_of;
   ScanTiming timing;
   std::uint64_t fit_samples = 1u << 13;
   bool json = false;
@@ -63,6 +64,9 @@ void add_design(CLI::App& app) {
   sub->add_option("--noise-rel", o->noise_rel, "virtual readings' relative noise (k = 1)")->capture_default_str();
   sub->add_option("--noise-abs", o->noise_abs, "virtual readings' absolute noise in β (k = 1)")
       ->capture_default_str();
+  sub->add_option("--noise-of", o->noise_of,
+                  "virtual readings' u per candidate from a scan of the same candidates (scan.export JSON), "
+                  "instead of --noise-rel and --noise-abs");
   sub->add_option("--speed", o->timing.speed_deg_s, "arm speed, °/s")->capture_default_str();
   sub->add_option("--settle", o->timing.settle_s, "settling after a move, s")->capture_default_str();
   sub->add_option("--reading", o->timing.reading_s, "reading time per point, s")->capture_default_str();
@@ -82,6 +86,7 @@ void add_design(CLI::App& app) {
       so.truth = model->bsdf;
       so.noise_rel = o->noise_rel;
       so.noise_abs = o->noise_abs;
+      if (!o->noise_of.empty()) so.noise_of = load_measured(o->noise_of);
       so.seed = model->seed;
       so.max_points = o->max_points;
       so.measurement = model->estimator_options();

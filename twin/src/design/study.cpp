@@ -3,10 +3,12 @@
 // The loop is goniod's (daemon/src/adaptive_loop.cpp): the choice of point k + 1 is made
 // while point k is measured, from the points before it, so the study's point counts and
 // times are the ones an instrument would see.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <random>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "gonio/proto/error.hpp"
@@ -72,6 +74,33 @@ DesignRun run_adaptive(Design& design, const std::vector<MeasuredPoint>& reading
   return run;
 }
 
+// The u of each candidate's reading per channel: the stated model, or the u the instrument
+// had at that geometry (options.noise_of).
+std::vector<std::vector<double>> noise_per_candidate(const std::vector<Geometry>& candidates, const WavelengthGrid& grid,
+                                                     const std::vector<Prediction>& truth,
+                                                     const DesignStudyOptions& options) {
+  std::vector<std::vector<double>> u(candidates.size(), std::vector<double>(grid.size()));
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    if (!options.noise_of) {
+      for (std::size_t k = 0; k < grid.size(); ++k)
+        u[c][k] = std::hypot(options.noise_rel * truth[c].beta[k], options.noise_abs);
+      continue;
+    }
+    const auto& m = *options.noise_of;
+    const auto at = std::find_if(m.points.begin(), m.points.end(), [&](const MeasuredPoint& p) {
+      return std::abs(p.geometry.theta_i - candidates[c].theta_i) < 1e-6 &&
+             std::abs(p.geometry.theta_r - candidates[c].theta_r) < 1e-6 &&
+             std::abs(p.geometry.phi_i - candidates[c].phi_i) < 1e-6 &&
+             std::abs(p.geometry.phi_r - candidates[c].phi_r) < 1e-6;
+    });
+    if (at == m.points.end())
+      throw Error::invalid("noise_of", fmt::format("{} has no point at candidate {} ({})", m.source, c,
+                                                   candidates[c].to_string()));
+    u[c] = m.wavelengths == grid ? at->u : interpolate_linear(m.wavelengths.values(), at->u, grid.values());
+  }
+  return u;
+}
+
 }  // namespace
 
 DesignStudy study_design(const std::string& model, const std::vector<Geometry>& candidates,
@@ -102,6 +131,7 @@ DesignStudy study_design(const std::string& model, const std::vector<Geometry>& 
   // candidate, so both runs read the same value where they measure the same geometry).
   const Twin twin(profile, make_bsdf(truth, grid), grid);
   const auto pred = twin.predict_many(candidates, options.measurement, options.parameters.threads);
+  const auto noise = noise_per_candidate(candidates, grid, pred, options);
   std::vector<MeasuredPoint> readings(candidates.size());
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     std::mt19937_64 rng(options.seed * 0x9E3779B97F4A7C15ull + c);
@@ -110,7 +140,7 @@ DesignStudy study_design(const std::string& model, const std::vector<Geometry>& 
     r.geometry = candidates[c];
     for (std::size_t k = 0; k < grid.size(); ++k) {
       const double b = pred[c].beta[k];
-      const double u = std::hypot(options.noise_rel * b, options.noise_abs);
+      const double u = noise[c][k];
       r.beta.push_back(b + u * normal(rng));
       r.u.push_back(u);
     }
@@ -155,7 +185,7 @@ DesignStudy study_design(const std::string& model, const std::vector<Geometry>& 
       }
       for (std::size_t ch = 0; ch < in.size(); ++ch) {
         const double t = pred[c].beta[ch], d = readings[c].beta[ch];
-        const double u = std::hypot(options.noise_rel * t, options.noise_abs);
+        const double u = noise[c][ch];
         const double scale = std::max(std::abs(t), options.curve.floor * peak[ch]);
         vs_truth = std::max(vs_truth, std::max(0.0, std::abs(in[ch] - t) - k * u) / scale);
         vs_dense = std::max(vs_dense, std::max(0.0, std::abs(in[ch] - d) - k * std::sqrt(2.0) * u) / scale);

@@ -146,5 +146,44 @@ TEST(ParameterDesign, StatedUncertaintyCoversTheHiddenValueOverNoiseDraws) {
   EXPECT_GE(covered, 8) << covered << " of " << draws;
 }
 
+// The study can take the noise an instrument actually has, candidate by candidate: the u of
+// a scan over the same candidates. Given the very u its own noise model states, it reads
+// the same values; a candidate the scan did not measure is named.
+TEST(DesignStudy, TakesEachCandidatesNoiseFromAMeasuredScan) {
+  std::vector<Geometry> cand;
+  for (double r = 25; r <= 65 + 1e-9; r += 5) cand.push_back(Geometry::in_plane(45, r));
+  const WavelengthGrid grid({550});
+  const auto profile = InstrumentProfile::preset("gcms4");
+  DesignStudyOptions so;
+  so.truth = "conductor:alpha=0.04,eta=0.2,k=3.9";
+  so.noise_rel = 0.01;
+  so.noise_abs = 1e-3;
+  so.max_points = 6;
+  so.parameters = quick();
+  so.measurement.rel_se = 1e-3;
+  const auto stated = study_design(kModel, cand, grid, profile, so);
+  const auto truth = Twin(profile, make_bsdf(so.truth, grid), grid).predict_many(cand, so.measurement, 2);
+  MeasuredData scan;
+  scan.wavelengths = grid;
+  scan.source = "a scan";
+  for (std::size_t c = cand.size(); c-- > 0;)  // in another order than the candidates'
+    scan.points.push_back({cand[c], {truth[c].beta[0]}, {std::hypot(0.01 * truth[c].beta[0], 1e-3)}});
+  so.noise_of = scan;
+  so.noise_rel = so.noise_abs = 0.5;  // not used
+  const auto measured = study_design(kModel, cand, grid, profile, so);
+  ASSERT_EQ(measured.uniform.status.parameters.size(), 1u);
+  EXPECT_EQ(measured.uniform.status.parameters[0].value, stated.uniform.status.parameters[0].value);
+  EXPECT_EQ(measured.uniform.status.parameters[0].u, stated.uniform.status.parameters[0].u);
+  EXPECT_EQ(measured.adaptive.chosen, stated.adaptive.chosen);
+  so.noise_of->points.erase(so.noise_of->points.begin() + 2);  // candidate 6, 45/55
+  try {
+    (void)study_design(kModel, cand, grid, profile, so);
+    FAIL() << "a candidate without a measured point";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "noise_of");
+    EXPECT_NE(std::string(e.what()).find("45/55"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace gonio::twin

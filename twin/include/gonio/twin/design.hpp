@@ -247,6 +247,11 @@ class CurveDesign final : public Design {
 struct DesignStudyOptions {
   std::string truth;     // the virtual sample; empty: the model at its start values
   double noise_rel = 0.005, noise_abs = 0.0005;
+  // The noise an instrument actually has: each candidate's u per channel taken from these
+  // points of a scan over the same candidates (the point at the candidate's geometry,
+  // resampled to the grid), instead of noise_rel and noise_abs. A like-for-like study of
+  // goniod's loop on that instrument.
+  std::optional<MeasuredData> noise_of;
   std::uint64_t seed = 1;
   int max_points = 50;
   ParameterDesignOptions parameters;
