@@ -1,5 +1,7 @@
 #include "gonio/daemon/instrument/adaptive_loop.hpp"
 
+#include <chrono>
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -82,8 +84,24 @@ void AdaptiveLoop::catch_up() {
   if (queued_.empty()) return;
   for (auto& [c, m] : queued_) design_->add(c, m);
   queued_.clear();
+  design_->set_timing(timing_.timing(prior_));
   design_->update();
   status_ = design_->status();
+}
+
+twin::DesignStatus AdaptiveLoop::timed(twin::DesignStatus s) const {
+  twin::DesignStatus::Time t;
+  t.timing = timing_.timing(prior_);
+  t.moves_timed = timing_.moves();
+  t.readings_timed = timing_.readings();
+  t.seconds = timing_.seconds();
+  t.waiting_seconds = waiting_s_;
+  // From where this run's first point began, as the uniform scan would (its first point is
+  // the first seed, the first candidate; after a restart, an estimate).
+  const auto& cand = design_->candidates();
+  t.uniform_seconds = first_move_s_ + t.timing.total_s(cand.front(), cand);
+  s.time = t;
+  return s;
 }
 
 std::optional<std::size_t> AdaptiveLoop::choose(const std::vector<std::size_t>& pending, const Geometry& arms) {
@@ -117,25 +135,37 @@ void AdaptiveLoop::measuring(std::size_t c) {
   });
 }
 
-void AdaptiveLoop::committed(std::size_t c, const PointRecord& p) {
+void AdaptiveLoop::committed(std::size_t c, const PointRecord& p, const PointTiming& t) {
   std::lock_guard lock(mu_);
   queued_.emplace_back(c, measured_of(p));
+  if (timing_.readings() == 0) first_move_s_ = t.move_s;
+  timing_.move(t.travel_deg, t.move_s);
+  timing_.reading(t.reading_s);
 }
 
 std::optional<std::size_t> AdaptiveLoop::next_after(std::size_t c) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto waited = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
   std::optional<std::size_t> next;
   if (job_.valid()) next = job_.get();
-  if (next) return next;
+  if (next) {
+    std::lock_guard lock(mu_);
+    waiting_s_ += waited();
+    return next;
+  }
   // The design expects the target with the points in hand: this point's reading decides.
   std::lock_guard lock(mu_);
   catch_up();
-  if (design_->target_reached()) return std::nullopt;
-  return choose({}, design_->candidates()[c]);
+  if (!design_->target_reached()) next = choose({}, design_->candidates()[c]);
+  waiting_s_ += waited();
+  return next;
 }
 
 twin::DesignStatus AdaptiveLoop::status() const {
   std::lock_guard lock(mu_);
-  return status_;
+  return timed(status_);
 }
 
 twin::DesignStatus AdaptiveLoop::finish(bool at_max_points) {
@@ -145,7 +175,7 @@ twin::DesignStatus AdaptiveLoop::finish(bool at_max_points) {
   status_ = design_->status();
   if (status_.state != twin::DesignState::target_reached && at_max_points)
     status_.state = twin::DesignState::max_points;
-  return status_;
+  return timed(status_);
 }
 
 }  // namespace gonio::daemon

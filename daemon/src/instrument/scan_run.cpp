@@ -167,6 +167,14 @@ PointReadings ScanRun::read(Point& pt, PointDevices& d) {
   const Geometry& g = pt.record.planned;
   PointRecord& p = pt.record;
   const auto& c = ctx_.config;
+  // The travel as ScanTiming prices it: the arms and the sample's rotation, one after another.
+  const auto travel = [&](Axis a, double to) {
+    const auto at = d.at.find(a);
+    return at == d.at.end() ? 0.0 : std::abs(to - at->second);
+  };
+  pt.timing.travel_deg = travel(Axis::incidence, g.theta_i) + travel(Axis::receive, g.theta_r) +
+                         (d.has_rotation ? travel(Axis::rotation, g.phi_i) : 0.0);
+  const double before_move = pt.device_s;
   device_call(FaultParty::motion, pt.device_s, [&] {
     d.arms.move(d.motion, d.at, g.theta_i, g.theta_r, d.has_rotation ? std::optional<double>(g.phi_i) : std::nullopt);
     if (c.settle.count() > 0) {
@@ -174,12 +182,14 @@ PointReadings ScanRun::read(Point& pt, PointDevices& d) {
       std::this_thread::sleep_for(c.settle);
     }
   });
+  pt.timing.move_s = pt.device_s - before_move;
   PointReadings in;
   device_call(FaultParty::photometer, pt.device_s, [&] {
     if (!nominal_ms_) nominal_ms_ = d.ranger.nominal_ms(d.photometer);
     const bool due = !reference_.white || scan_.plan.reads_reference(since_start_);
     in = d.ranger.read(d.photometer, *nominal_ms_, due, reference_, fmt::format("scan {} point {}", scan_.id, p.index));
   });
+  pt.timing.reading_s = pt.device_s - pt.timing.move_s - before_move;
   if (in.integration_ms > 0) p.integration_ms = in.integration_ms;
   device_call(FaultParty::motion, pt.device_s, [&] {
     ctx_.beat();
@@ -318,7 +328,7 @@ std::optional<std::string> ScanRun::after_commit(const Point& pt) {
     }
   }
   if (adaptive_) {
-    adaptive_->committed(pt.geometry, p);
+    adaptive_->committed(pt.geometry, p, pt.timing);
     choosing_ = false;
     if (next_ < scan_.points_total) candidate_ = adaptive_->next_after(pt.geometry);
     set_adaptive_status(adaptive_->status().to_json());

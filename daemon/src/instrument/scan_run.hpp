@@ -105,6 +105,7 @@ class ScanRun {
     std::size_t geometry = 0;  // index into the plan's geometries
     Clock::time_point started;
     double device_s = 0, twin_s = 0;  // seconds the devices and the twin took
+    PointTiming timing;                // the move's and the reading's share of device_s
   };
   Point begin_point();                                            // the geometry; its prediction asked for
   PointReadings read(Point& pt, PointDevices& d);                  // 3

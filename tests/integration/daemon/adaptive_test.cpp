@@ -71,6 +71,16 @@ TEST(Adaptive, ParametersModeFindsTheHiddenRoughnessAndStopsAtItsTarget) {
   // The hidden value within the stated uncertainty (k = 3, and the twin's own noise).
   EXPECT_NEAR(alpha, 0.05, std::max(3 * u, 0.0005)) << a.dump();
   EXPECT_NE(full["reason"].get<std::string>().find("target reached"), std::string::npos) << full.dump();
+  // Instrument time: every point's move and reading timed, the timing learnt within the
+  // ranges ScanTiming takes, and what a uniform scan of the candidates would have cost.
+  const auto& t = a["time"];
+  ASSERT_TRUE(t.is_object()) << a.dump();
+  EXPECT_EQ(t["readings_timed"], used);
+  EXPECT_GE(t["moves_timed"].get<int>(), 4);  // at least the seeds' sweep
+  EXPECT_NO_THROW((twin::ScanTiming{t["speed_deg_s"].get<double>(), t["settle_s"].get<double>(), t["reading_s"].get<double>()}.validate()))
+      << t.dump();
+  EXPECT_GT(t["uniform_seconds"].get<double>(), 0);
+  EXPECT_DOUBLE_EQ(t["saved_seconds"].get<double>(), t["uniform_seconds"].get<double>() - t["seconds"].get<double>());
   const auto points = all_points(c, id);
   ASSERT_EQ(points.size(), static_cast<std::size_t>(used));
   expect_points_are_candidates(points, full);

@@ -38,6 +38,43 @@ double ScanTiming::total_s(const Geometry& start, const std::vector<Geometry>& s
   return t;
 }
 
+void TimingRecord::move(double travel_deg, double seconds) {
+  total_s_ += seconds;
+  if (travel_deg <= 1e-9) return;  // the arms stayed: nothing to learn about a move
+  travel_.push_back(travel_deg);
+  move_s_.push_back(seconds);
+}
+
+void TimingRecord::reading(double seconds) {
+  total_s_ += seconds;
+  reading_s_.push_back(seconds);
+}
+
+ScanTiming TimingRecord::timing(const ScanTiming& prior) const {
+  ScanTiming t = prior;
+  if (!reading_s_.empty()) {
+    auto r = reading_s_;
+    std::nth_element(r.begin(), r.begin() + static_cast<long>(r.size() / 2), r.end());
+    t.reading_s = std::clamp(r[r.size() / 2], 0.0, 3600.0);
+  }
+  // seconds = settle + travel/speed, by least squares over the moves.
+  const auto n = static_cast<double>(travel_.size());
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (std::size_t k = 0; k < travel_.size(); ++k) {
+    sx += travel_[k];
+    sy += move_s_[k];
+    sxx += travel_[k] * travel_[k];
+    sxy += travel_[k] * move_s_[k];
+  }
+  const double var = n * sxx - sx * sx;
+  if (travel_.size() >= 2 && var > 1e-9 * n * sxx) {
+    const double per_deg = (n * sxy - sx * sy) / var;
+    t.settle_s = std::clamp((sy - per_deg * sx) / n, 0.0, 60.0);
+    t.speed_deg_s = per_deg > 1e-3 ? std::clamp(1 / per_deg, 0.1, 1000.0) : 1000.0;
+  }
+  return t;
+}
+
 nlohmann::json DesignStatus::to_json() const {
   nlohmann::json j{{"mode", to_text(mode)}, {"state", to_text(state)}, {"points_used", points_used}};
   if (mode == AdaptiveMode::parameters) {
@@ -50,6 +87,16 @@ nlohmann::json DesignStatus::to_json() const {
     j["estimated_error"] = estimated_error ? nlohmann::json(*estimated_error) : nlohmann::json(nullptr);
   }
   j["warnings"] = warnings;
+  if (time)
+    j["time"] = {{"speed_deg_s", time->timing.speed_deg_s},
+                 {"settle_s", time->timing.settle_s},
+                 {"reading_s", time->timing.reading_s},
+                 {"moves_timed", time->moves_timed},
+                 {"readings_timed", time->readings_timed},
+                 {"seconds", time->seconds},
+                 {"waiting_seconds", time->waiting_seconds},
+                 {"uniform_seconds", time->uniform_seconds},
+                 {"saved_seconds", time->uniform_seconds - time->seconds}};
   return j;
 }
 

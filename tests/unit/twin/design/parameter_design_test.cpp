@@ -185,5 +185,32 @@ TEST(DesignStudy, TakesEachCandidatesNoiseFromAMeasuredScan) {
   }
 }
 
+// The instrument's timing from a run's own points: moves fitted to settle + travel/speed,
+// readings by their median (an autoranger's retry does not move it); the prior's values
+// until there is something to learn from.
+TEST(TimingRecord, LearnsSpeedSettlingAndReadingFromThePoints) {
+  ScanTiming prior;
+  TimingRecord r;
+  EXPECT_EQ(r.timing(prior).speed_deg_s, prior.speed_deg_s);
+  r.move(0, 0);  // the arms stayed (a repeat reading): no move to learn from
+  r.move(10, 0.3 + 10 / 12.5);
+  EXPECT_EQ(r.timing(prior).speed_deg_s, prior.speed_deg_s);  // one travel only
+  for (const double deg : {1.0, 25.0, 115.0}) r.move(deg, 0.3 + deg / 12.5);
+  for (const double s : {1.5, 1.6, 1.4, 9.0, 1.5}) r.reading(s);
+  const auto t = r.timing(prior);
+  EXPECT_NEAR(t.speed_deg_s, 12.5, 1e-9);
+  EXPECT_NEAR(t.settle_s, 0.3, 1e-9);
+  EXPECT_EQ(t.reading_s, 1.5);
+  EXPECT_EQ(r.moves(), 4u);
+  EXPECT_EQ(r.readings(), 5u);
+  EXPECT_NEAR(r.seconds(), 0.3 * 4 + 151 / 12.5 + 15.0, 1e-9);
+  // Arms that take no time (the mock at time_scale 0): the fastest speed ScanTiming allows.
+  TimingRecord instant;
+  for (const double deg : {1.0, 5.0, 30.0}) instant.move(deg, 0);
+  EXPECT_EQ(instant.timing(prior).speed_deg_s, 1000);
+  EXPECT_EQ(instant.timing(prior).settle_s, 0);
+  EXPECT_NO_THROW(instant.timing(prior).validate());
+}
+
 }  // namespace
 }  // namespace gonio::twin

@@ -55,6 +55,29 @@ struct ScanTiming {
   double total_s(const Geometry& start, const std::vector<Geometry>& sequence) const;
 };
 
+// The instrument's own timing, learnt from a run's points: each point's move (its travel,
+// summed over the axes, and the seconds from the first command to the end of settling) and
+// its reading (the seconds from the dark to the sample, the white when due and the
+// autoranger's retries included). Moves are fitted by least squares to seconds = settle +
+// travel / speed; readings by their median. Until it has seen enough (two moves of
+// different travel; one reading) a value stays at the prior's.
+class TimingRecord {
+ public:
+  void move(double travel_deg, double seconds);
+  void reading(double seconds);
+  // The timing learnt, the prior's where not learnt yet, clamped to ScanTiming's ranges
+  // (arms that take no time, as the mock's at time_scale 0, learn the fastest speed).
+  ScanTiming timing(const ScanTiming& prior) const;
+  std::size_t moves() const noexcept { return travel_.size(); }
+  std::size_t readings() const noexcept { return reading_s_.size(); }
+  // Seconds spent on the points recorded: moves and readings, as measured.
+  double seconds() const noexcept { return total_s_; }
+
+ private:
+  std::vector<double> travel_, move_s_, reading_s_;
+  double total_s_ = 0;
+};
+
 // Where the arms can go, by the motion guard's rule (proto/arms.hpp) with the profile's
 // clearance: a geometry that keeps arms.min_separation_deg and lies on the arms' side of the
 // collision zone — the side of the profile's calibration geometry (0°/45°), where the arms
@@ -96,6 +119,17 @@ struct DesignStatus {
   std::optional<double> chi2_per_dof;          // parameters mode
   bool misfit = false;                          // χ²/dof above the fit's misfit limit
   std::vector<std::string> warnings;
+  // Instrument time (goniod's loop): the timing the choices are priced with (learnt from
+  // the run), the seconds the points took as measured, and what a uniform scan of every
+  // candidate in list order would take by that timing.
+  struct Time {
+    ScanTiming timing;
+    std::size_t moves_timed = 0, readings_timed = 0;
+    double seconds = 0;          // the points' moves and readings, measured
+    double waiting_seconds = 0;  // the arms idle for a choice
+    double uniform_seconds = 0;  // every candidate once, by `timing`
+  };
+  std::optional<Time> time;
   nlohmann::json to_json() const;
 };
 
@@ -128,6 +162,8 @@ class Design {
   // motion guard's rule); by default every move is allowed.
   using Movable = std::function<bool(const Geometry& from, const Geometry& to)>;
   void set_movable(Movable m) { movable_ = std::move(m); }
+  // The timing the choices are priced with (ScanTiming's defaults until the run's own).
+  virtual void set_timing(const ScanTiming& t) = 0;
 
  protected:
   Design(std::vector<Geometry> candidates, int max_readings);
@@ -171,6 +207,7 @@ class ParameterDesign final : public Design {
   const std::optional<FitResult>& fit() const noexcept { return fit_; }
   // The current estimate of the free parameters (the template's starts before any fit).
   const std::vector<double>& estimate() const noexcept { return x_; }
+  void set_timing(const ScanTiming& t) override { options_.timing = t; }
 
  private:
   void linearise();  // candidates' Jacobians and predicted β at x_
@@ -223,6 +260,7 @@ class CurveDesign final : public Design {
   // positive) through its measured neighbours along its curve; the measurement itself where
   // measured. Empty when c has no measured point on either side.
   std::vector<double> interpolate(std::size_t c) const;
+  void set_timing(const ScanTiming& t) override { options_.timing = t; }
 
  private:
   struct Curve {

@@ -25,6 +25,12 @@
 
 namespace gonio::daemon {
 
+// What one point cost the instrument: its move (the travel summed over the axes; the
+// seconds to the end of settling) and its reading (dark, white when due, sample).
+struct PointTiming {
+  double travel_deg = 0, move_s = 0, reading_s = 0;
+};
+
 class AdaptiveLoop {
  public:
   // Whether the arms can go from one geometry to another (the motion guard's rule).
@@ -47,8 +53,9 @@ class AdaptiveLoop {
   std::optional<std::size_t> first(const std::optional<Geometry>& arms);
   // Point of candidate `c` is being measured: starts choosing the one after it.
   void measuring(std::size_t c);
-  // Point of candidate `c` is stored.
-  void committed(std::size_t c, const PointRecord& p);
+  // Point of candidate `c` is stored; `t` what it took, from which the loop learns the
+  // instrument's timing and prices the next choices with it.
+  void committed(std::size_t c, const PointRecord& p, const PointTiming& t);
   // The choice after `c` (measuring(c) first); nullopt: the loop is done.
   std::optional<std::size_t> next_after(std::size_t c);
   // The readings of candidate c so far, this one included once measuring(c) was called.
@@ -60,6 +67,7 @@ class AdaptiveLoop {
  private:
   void catch_up();  // under mu_: queued points into the design, and an update
   std::optional<std::size_t> choose(const std::vector<std::size_t>& pending, const Geometry& arms);
+  twin::DesignStatus timed(twin::DesignStatus s) const;  // under mu_: with the time report
 
   std::vector<std::size_t> seeds_;
   std::size_t taken_ = 0;  // points chosen so far (restored ones included)
@@ -70,6 +78,10 @@ class AdaptiveLoop {
   std::unique_ptr<twin::Design> design_;
   std::vector<std::pair<std::size_t, twin::MeasuredPoint>> queued_;
   twin::DesignStatus status_;
+  twin::ScanTiming prior_;      // ScanTiming's defaults: what the choices start with
+  twin::TimingRecord timing_;   // this run's points (not those before a restart)
+  double waiting_s_ = 0;        // the runner waiting for a choice
+  double first_move_s_ = 0;     // to this run's first point
   std::future<std::optional<std::size_t>> job_;
 };
 
