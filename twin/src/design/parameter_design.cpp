@@ -52,6 +52,11 @@ NoiseModel noise_of(const MeasuredData& data) {
 
 }  // namespace
 
+double ParameterDesignOptions::ModelTrust::relative_u(const Geometry& g) const {
+  const double u = near_specular + per_10deg * std::abs(g.aspecular()) / 10;
+  return g.theta_r >= grazing_deg ? u * grazing_factor : u;
+}
+
 void ParameterDesignOptions::validate() const {
   if (!(target_rel_u > 0 && target_rel_u <= 1))
     throw Error::out_of_range("target_rel_u", target_rel_u, 0, 1);
@@ -62,6 +67,15 @@ void ParameterDesignOptions::validate() const {
   if (max_readings < 1 || max_readings > 100) throw Error::out_of_range("max_readings", max_readings, 1, 100);
   if (jacobian_replicates < 4 || jacobian_replicates > 64)
     throw Error::out_of_range("jacobian_replicates", jacobian_replicates, 4, 64);
+  if (!(model_trust.near_specular >= 0 && model_trust.near_specular <= 1))
+    throw Error::out_of_range("model_trust.near_specular", model_trust.near_specular, 0, 1);
+  if (!(model_trust.per_10deg >= 0 && model_trust.per_10deg <= 1))
+    throw Error::out_of_range("model_trust.per_10deg", model_trust.per_10deg, 0, 1);
+  if (!(model_trust.grazing_deg >= 0 && model_trust.grazing_deg <= 90))
+    throw Error::out_of_range("model_trust.grazing_deg", model_trust.grazing_deg, 0, 90, "°");
+  if (!(model_trust.grazing_factor >= 1 && model_trust.grazing_factor <= 100))
+    throw Error::out_of_range("model_trust.grazing_factor", model_trust.grazing_factor, 1, 100);
+  if (!(max_cell_share > 0 && max_cell_share <= 1)) throw Error::out_of_range("max_cell_share", max_cell_share, 0, 1);
 }
 
 ParameterDesign::ParameterDesign(std::string model, std::vector<Geometry> candidates, WavelengthGrid grid,
@@ -77,6 +91,13 @@ ParameterDesign::ParameterDesign(std::string model, std::vector<Geometry> candid
   for (const auto& p : tmpl_->parameters()) x_.push_back(p.start);
   data_.wavelengths = grid_;
   data_.source = "adaptive scan";
+  // Each candidate in the cell of its nearest seed by list position (ties to the earlier).
+  const auto sd = seeds();
+  cell_.assign(candidates_.size(), 0);
+  for (std::size_t c = 0, k = 0; c < candidates_.size(); ++c) {
+    while (k + 1 < sd.size() && 2 * c > sd[k] + sd[k + 1]) ++k;
+    cell_[c] = k;
+  }
   linearise();
 }
 
@@ -107,17 +128,26 @@ void ParameterDesign::linearise() {
   const std::size_t N = candidates_.size();
   jac_.assign(N, std::vector<double>(C * P));
   beta_.assign(N, {});
-  w_.assign(N, std::vector<double>(C));
+  w_read_.assign(N, std::vector<double>(C));
   for (std::size_t c = 0; c < N; ++c) {
     beta_[c] = pred[c][0].beta;
     for (std::size_t k = 0; k < C; ++k) {
       for (std::size_t j = 0; j < P; ++j) jac_[c][k * P + j] = (pred[c][1 + j].beta[k] - beta_[c][k]) / step[j];
-      w_[c][k] = 1 / std::pow(noise.u(std::max(0.0, beta_[c][k])), 2);
+      w_read_[c][k] = 1 / std::pow(noise.u(std::max(0.0, beta_[c][k])), 2);
     }
   }
   // Measured candidates weigh with the uncertainty they were read with.
   for (std::size_t m = 0; m < measured_.size(); ++m)
-    for (std::size_t k = 0; k < C; ++k) w_[measured_[m]][k] = 1 / std::pow(data_.points[m].u[k], 2);
+    for (std::size_t k = 0; k < C; ++k) w_read_[measured_[m]][k] = 1 / std::pow(data_.points[m].u[k], 2);
+  // The choice's weights also carry the model's own uncertainty where the candidate lies.
+  w_ = w_read_;
+  for (std::size_t c = 0; c < N; ++c) {
+    const double rel = options_.model_trust.relative_u(candidates_[c]);
+    for (std::size_t k = 0; k < C; ++k) {
+      const double um = rel * std::abs(beta_[c][k]);
+      w_[c][k] = 1 / (1 / w_read_[c][k] + um * um);
+    }
+  }
   // A weak prior: a quarter of each parameter's range (of its logarithm for log-scale ones)
   // as one standard deviation, so that F is invertible before the data determine anything.
   prior_.assign(P, 0);
@@ -128,15 +158,16 @@ void ParameterDesign::linearise() {
   }
 }
 
-std::vector<double> ParameterDesign::information(const std::vector<std::size_t>& extra) const {
+std::vector<double> ParameterDesign::information(const std::vector<std::size_t>& extra, bool readings_only) const {
   const std::size_t P = x_.size(), C = grid_.size();
   // A fit that misses (χ²/dof > 1) inflates its u by √(χ²/dof); the information is deflated alike.
   const double scale = fit_ ? 1 / std::max(1.0, fit_->chi2_per_dof) : 1.0;
+  const auto& weights = readings_only ? w_read_ : w_;
   Eigen::MatrixXd F = Eigen::MatrixXd::Zero(static_cast<long>(P), static_cast<long>(P));
   const auto add = [&](std::size_t c) {
     const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
         jac_[c].data(), static_cast<long>(C), static_cast<long>(P));
-    const Eigen::Map<const Eigen::VectorXd> w(w_[c].data(), static_cast<long>(C));
+    const Eigen::Map<const Eigen::VectorXd> w(weights[c].data(), static_cast<long>(C));
     F.noalias() += scale * J.transpose() * w.asDiagonal() * J;
   };
   for (const auto c : measured_) add(c);
@@ -158,12 +189,45 @@ double ParameterDesign::log_det_gain(const std::vector<double>& info_inv, std::s
   return std::log(std::max(1.0, M.partialPivLu().determinant()));
 }
 
+bool ParameterDesign::keeps_coverage(const std::vector<std::size_t>& pending, std::size_t c) const {
+  if (options_.max_cell_share >= 1) return true;
+  const long P = static_cast<long>(x_.size()), C = static_cast<long>(grid_.size());
+  const std::size_t cells = cell_.empty() ? 1 : cell_.back() + 1;
+  std::vector<Eigen::MatrixXd> Fcell(cells, Eigen::MatrixXd::Zero(P, P));
+  const auto info = [&](std::size_t q) -> Eigen::MatrixXd {
+    const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(jac_[q].data(), C, P);
+    const Eigen::Map<const Eigen::VectorXd> w(w_[q].data(), C);
+    return J.transpose() * w.asDiagonal() * J;
+  };
+  for (const auto q : measured_) Fcell[cell_[q]] += info(q);
+  for (const auto q : pending) Fcell[cell_[q]] += info(q);
+  // Each cell's share of the information, trace(F⁻¹ F_cell)/P (the prior keeps F
+  // invertible; its share is nobody's).
+  const auto shares = [&] {
+    Eigen::MatrixXd F = Eigen::MatrixXd::Zero(P, P);
+    for (const auto& f : Fcell) F += f;
+    for (long j = 0; j < P; ++j) F(j, j) += prior_[static_cast<std::size_t>(j)];
+    const auto llt = F.llt();
+    std::vector<double> out;
+    for (const auto& f : Fcell) out.push_back(llt.solve(f).trace() / static_cast<double>(P));
+    return out;
+  };
+  const auto before = shares();
+  const auto k = cell_[c];
+  // Only the cell that gives the most already is held to the cap: the others may grow
+  // until they are that cell.
+  if (std::max_element(before.begin(), before.end()) - before.begin() != static_cast<long>(k)) return true;
+  Fcell[k] += info(c);
+  return shares()[k] <= options_.max_cell_share;
+}
+
 std::optional<std::size_t> ParameterDesign::next(const std::vector<std::size_t>& pending,
                                                  const Geometry& arms) const {
-  const auto inv = information(pending);
-  // Once the points in hand and pending will do, by the linearised design, no more: the
-  // refit with the pending points decides (target_reached), and the loop asks again if not.
+  // Once the points in hand and pending will do, by the linearised design and the readings'
+  // u (what the refit will state), no more: the refit with the pending points decides
+  // (target_reached), and the loop asks again if not.
   if (fit_ && !pending.empty() && fit_->chi2_per_dof <= options_.fit.misfit_limit) {
+    const auto inv = information(pending, true);
     const std::size_t P = x_.size();
     const double inflate = std::max(1.0, fit_->chi2_per_dof);
     bool enough = true;
@@ -171,8 +235,11 @@ std::optional<std::size_t> ParameterDesign::next(const std::vector<std::size_t>&
       enough = enough && std::sqrt(inv[j * P + j] * inflate) <= options_.target_rel_u * std::abs(x_[j]);
     if (enough) return std::nullopt;
   }
-  std::optional<std::size_t> best;
-  double best_score = -1;
+  const auto inv = information(pending);
+  // The most information per second; among the candidates that keep the seeds' coverage
+  // when there are any.
+  std::optional<std::size_t> best, best_covering;
+  double best_score = -1, best_covering_score = -1;
   for (std::size_t c = 0; c < candidates_.size(); ++c) {
     if (!available(c, pending) || !movable(arms, c)) continue;
     const double seconds = std::max(1e-3, options_.timing.point_s(arms, candidates_[c]));
@@ -181,8 +248,12 @@ std::optional<std::size_t> ParameterDesign::next(const std::vector<std::size_t>&
       best_score = score;
       best = c;
     }
+    if (score > best_covering_score && keeps_coverage(pending, c)) {
+      best_covering_score = score;
+      best_covering = c;
+    }
   }
-  return best;
+  return best_covering ? best_covering : best;
 }
 
 std::vector<std::size_t> ParameterDesign::seeds() const {

@@ -185,6 +185,40 @@ TEST(DesignStudy, TakesEachCandidatesNoiseFromAMeasuredScan) {
   }
 }
 
+// A sample the model does not describe (a glossy lobe under a weak broad haze, fitted as
+// one GGX lobe): taken as exact, the design would put its points on the lobe's grazing tail,
+// where the model departs most, and infer a roughness there that the uniform scan's fit
+// does not see. With the model's own u by region and the seeds' coverage it keeps points on
+// both flanks, and its estimate lies nearer the uniform scan's.
+TEST(ParameterDesign, ASampleTheModelDoesNotDescribeIsNotJudgedByItsTailAlone) {
+  std::vector<Geometry> cand;
+  for (double r = -35; r <= 80 + 1e-9; r += 2) cand.push_back(Geometry::in_plane(45, r));
+  DesignStudyOptions so;
+  so.truth = "conductor:alpha=0.02,eta=0.2,k=3.9+conductor:alpha=0.08,eta=1.1,k=0";
+  so.noise_rel = 0.008;  // about the mock's on the lobe's flanks
+  so.noise_abs = 1.2e-4;
+  so.max_points = 30;
+  so.parameters = quick();
+  so.parameters.target_rel_u = 1e-6;  // runs to max_points
+  so.measurement.rel_se = 1e-3;
+  const auto grid = WavelengthGrid({450, 550, 650});
+  const auto profile = InstrumentProfile::preset("gcms4");
+  const auto trusted = study_design(kModel, cand, grid, profile, so);
+  auto exact = so;
+  exact.parameters.model_trust = {.near_specular = 0, .per_10deg = 0, .grazing_deg = 90, .grazing_factor = 1};
+  exact.parameters.max_cell_share = 1;
+  const auto tail_only = study_design(kModel, cand, grid, profile, exact);
+  const auto grazing = [&](const DesignRun& r) {
+    return std::count_if(r.chosen.begin(), r.chosen.end(), [&](std::size_t c) { return cand[c].theta_r >= 70; });
+  };
+  const auto alpha = [](const DesignRun& r) { return r.status.parameters.at(0).value; };
+  const double uniform = alpha(trusted.uniform);
+  EXPECT_GT(grazing(tail_only.adaptive), 12) << "the exact model's design is not tail-heavy: the test shows nothing";
+  EXPECT_LT(grazing(trusted.adaptive), 8);
+  EXPECT_LT(std::abs(alpha(trusted.adaptive) - uniform), 0.5 * std::abs(alpha(tail_only.adaptive) - uniform))
+      << "uniform " << uniform << ", adaptive " << alpha(trusted.adaptive) << ", as exact " << alpha(tail_only.adaptive);
+}
+
 // The instrument's timing from a run's own points: moves fitted to settle + travel/speed,
 // readings by their median (an autoranger's retry does not move it); the prior's values
 // until there is something to learn from.

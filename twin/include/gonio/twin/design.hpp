@@ -187,6 +187,23 @@ struct ParameterDesignOptions {
   std::uint64_t jacobian_samples = 1u << 12;  // per candidate, for the information
   int jacobian_replicates = 8;
   unsigned threads = 0;                // 0: all cores
+  // The model's own uncertainty, relative to β, by region: how far a real sample may depart
+  // from the model there. It weighs where to measure (the choice's information), not the
+  // fit: u_model/β = near_specular + per_10deg × |aspecular|/10°, times grazing_factor where
+  // θr ≥ grazing_deg (a lobe's tail: where real samples depart most from microfacet models
+  // and the footprint is largest). 0 everywhere: the model is taken as exact.
+  struct ModelTrust {
+    double near_specular = 0.002;
+    double per_10deg = 0.002;
+    double grazing_deg = 70;
+    double grazing_factor = 3;
+    double relative_u(const Geometry& g) const;
+  } model_trust;
+  // The seeds' coverage: no seed's cell (the candidates nearer that seed than any other, in
+  // list order) may give more than this share of the information about the parameters
+  // (trace(F⁻¹ F_cell) / P over the points measured and pending) while another cell can
+  // still be chosen, so that no one region — a lobe's tail — determines them alone. 1: off.
+  double max_cell_share = 0.5;
   void validate() const;
 };
 
@@ -212,7 +229,11 @@ class ParameterDesign final : public Design {
  private:
   void linearise();  // candidates' Jacobians and predicted β at x_
   double log_det_gain(const std::vector<double>& info_inv, std::size_t c) const;
-  std::vector<double> information(const std::vector<std::size_t>& extra) const;
+  // F⁻¹ of the points measured and `extra` with the prior: by the choice's weights (the
+  // readings' u and the model's own), or by the readings' u alone (what the fit will say).
+  std::vector<double> information(const std::vector<std::size_t>& extra, bool readings_only = false) const;
+  // Whether adding c keeps its seed's cell within max_cell_share of the information.
+  bool keeps_coverage(const std::vector<std::size_t>& pending, std::size_t c) const;
 
   std::string model_;
   WavelengthGrid grid_;
@@ -225,7 +246,9 @@ class ParameterDesign final : public Design {
   std::string note_;                      // why the last refit failed
   std::vector<std::vector<double>> jac_;  // per candidate: channels × parameters, row-major
   std::vector<std::vector<double>> beta_; // per candidate: predicted β
-  std::vector<std::vector<double>> w_;    // per candidate: 1/u² per channel (predicted u)
+  std::vector<std::vector<double>> w_;    // per candidate: 1/(u² + u_model²) per channel, the choice's
+  std::vector<std::vector<double>> w_read_;  // per candidate: 1/u² (the readings' u alone)
+  std::vector<std::size_t> cell_;         // per candidate: its seed's cell
   std::vector<double> prior_;             // prior precision per parameter (diagonal)
 };
 
