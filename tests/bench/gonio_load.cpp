@@ -666,7 +666,19 @@ json measure_hostile(Client& admin, const Goniod& g, std::int64_t scan, double s
   out["control"] = measure_control(admin, g.uri(), g.token(), scan, seconds);
   out["peak_rss_mib"] = peak_rss_mib(g.pid());
   out["single"] = single;
-  out["net"] = admin.call("system.info")["net"];
+  // What the flood left behind (batches of peers long gone) is worked off or skipped: the
+  // time until no batch answer is being assembled any more.
+  const auto drain_start = Clock::now();
+  json info = admin.call("system.info");
+  while (info["rpc"].value("building_bytes", 0) > 0 && Clock::now() - drain_start < std::chrono::seconds(60)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(250));
+    info = admin.call("system.info");
+  }
+  out["drain_s"] = info["rpc"].value("building_bytes", 0) > 0
+                       ? json(nullptr)
+                       : json(std::chrono::duration<double>(Clock::now() - drain_start).count());
+  out["net"] = info["net"];
+  out["rpc"] = info["rpc"];
   return out;
 }
 
@@ -747,13 +759,15 @@ void print(const Report& rep, const Options& o) {
     std::cout << fmt::format(
         "hostile: goniod peak RSS {:.1f} MiB in single requests (from {:.1f}), {:.1f} MiB in {} clients "
         "({} acts, from {:.1f}){}; scan.pause under {} export viewers ({} exports): p50 {:.2f} ms, p99 {:.2f} ms, "
-        "max {:.2f} ms ({} pauses); net {}\n",
+        "max {:.2f} ms ({} pauses); batches assembled for the flood drained {}; net {}; rpc {}\n",
         h["single_peak_rss_mib"].get<double>(), h["single_start_rss_mib"].get<double>(),
         h["flood_peak_rss_mib"].get<double>(), h["flood_clients"].get<int>(), h["flood_acts"].get<std::size_t>(),
         h["flood_start_rss_mib"].get<double>(),
         h["peak_reset"].get<bool>() ? "" : " (peaks not reset: the kernel refused; each covers goniod's life)", ctl["viewers"].get<int>(), ctl["exports"].get<std::size_t>(),
         ctl["pause_p50_ms"].get<double>(), ctl["pause_p99_ms"].get<double>(), ctl["pause_max_ms"].get<double>(),
-        ctl["pauses"].get<std::size_t>(), h["net"].dump());
+        ctl["pauses"].get<std::size_t>(),
+        h["drain_s"].is_null() ? std::string("NOT within 60 s") : fmt::format("{:.1f} s after", h["drain_s"].get<double>()),
+        h["net"].dump(), h["rpc"].dump());
   }
 }
 

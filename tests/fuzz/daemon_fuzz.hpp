@@ -54,7 +54,7 @@ struct FuzzDaemon {
   FuzzDaemon()
       : dir(std::filesystem::temp_directory_path() / fmt::format("gonio-fuzz-{}", ::getpid())),
         config(make_config()),
-        dispatcher([](std::function<void()> f) { f(); }) {
+        dispatcher([](std::uint64_t, std::function<void()> f) { f(); }) {
     spdlog::set_level(spdlog::level::off);
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);

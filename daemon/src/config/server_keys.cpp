@@ -186,6 +186,9 @@ void server_keys(std::vector<ConfigKey>& k) {
                       "elements of one batch; more: one −32600 naming the limit"));
   k.push_back(integer("server", "max_response_bytes", field(&C::max_response_bytes), 64 << 10, 1ll << 30,
                       "one answer, single or batch; a call whose answer would pass it gets −32008 instead"));
+  k.push_back(integer("server", "max_building_bytes", field(&C::max_building_bytes), 1 << 20, 16ll << 30,
+                      "answers of batches still being assembled, over all connections; a batch "
+                      "element whose answer does not fit gets −32010 in its place"));
   k.push_back(origins_key());
   k.push_back(with_default(
       custom("server", "web_root", "string", "",

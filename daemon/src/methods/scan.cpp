@@ -28,9 +28,10 @@ using nlohmann::json;
 namespace {
 
 // The most values (points × wavelength channels) one scan.export call reads and writes: a
-// csv or json chunk (~160–200 bytes of text per value, within the default response limit),
-// and a bsdf or ssdd table, which needs the whole scan at once.
-constexpr std::size_t kMaxChunkValues = 32768;
+// csv or json chunk (~160–200 bytes of text per value, ~3 MB: two copies of it are what a
+// worker holds while it writes one, a term of the memory bound in daemon/README.md), and a
+// bsdf or ssdd table, which needs the whole scan at once.
+constexpr std::size_t kMaxChunkValues = 16384;
 constexpr std::size_t kMaxTableValues = 262144;
 // Room left after an answer written as text for the JSON-RPC envelope around it (its head,
 // the id and the closing brace; an id longer than that costs one copy).
@@ -159,6 +160,9 @@ rpc::Result scan_points(Services& s, rpc::Call& c) {
   std::string out = fmt::format(R"({{"scan":{},"offset":{},"points_done":{},"points_total":{},"next_offset":{},"points":[)",
                                 id, offset, progress->first, progress->second,
                                 next < progress->first ? std::to_string(next) : "null");
+  std::size_t bytes = out.size() + 2;
+  for (const auto& t : texts) bytes += t.size() + 1;
+  out.reserve(bytes);  // a page of 1000 points is megabytes: built once, not regrown
   for (std::size_t i = 0; i < texts.size(); ++i) {
     if (i) out += ',';
     out += texts[i];

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cerrno>
+#include <cstring>
 #include <atomic>
 #include <filesystem>
 
@@ -131,7 +132,11 @@ class NdjsonSession final : public StreamSession {
   }
 
   void do_read() {
-    if (reading_ || !may_read()) return;
+    if (reading_) return;
+    if (!may_read()) {
+      watch_for_hang_up();
+      return;
+    }
     // Complete lines left over from a pause are handled before anything new is read.
     if (buffer_.find('\n') != std::string::npos) {
       handle_lines();
@@ -170,6 +175,32 @@ class NdjsonSession final : public StreamSession {
     }
     arm_timer();
     do_read();
+  }
+
+  // While reading is paused (requests in flight, answers backed up), a peer that hangs up
+  // would go unnoticed until its answers are written, and the reads it asked for would be
+  // done for nobody. So the socket is watched: readable with nothing to peek at is the end
+  // of the stream (the dispatcher then skips the peer's reads not yet started). Data to
+  // peek at waits for reading to resume. Over TLS a hang-up starts with a close_notify
+  // record, which is data: TLS peers are noticed when reading resumes.
+  void watch_for_hang_up() {
+    if constexpr (!Tls) {
+      if (watching_ || closed_ || close_after_write_) return;
+      watching_ = true;
+      socket_.async_wait(Socket::wait_read, [self = self()](const error_code& ec) {
+        self->watching_ = false;
+        if (ec || self->closed_ || self->reading_) return;
+        char byte = 0;
+        const auto n = ::recv(self->socket_.native_handle(), &byte, 1, MSG_PEEK | MSG_DONTWAIT);
+        if (n == 0) {
+          self->close("");
+        } else if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+          self->close(std::strerror(errno));
+        } else if (n < 0 && !self->may_read()) {
+          self->watch_for_hang_up();
+        }
+      });
+    }
   }
 
   // Dispatches the complete lines in the buffer while the connection may take more work;
@@ -232,8 +263,8 @@ class NdjsonSession final : public StreamSession {
           h->text = std::move(response);
           int inside = 0;
           if (h->state.compare_exchange_strong(inside, 1)) return;
-          asio::post(self->executor_, [self, h] {
-            self->on_reply(std::move(h->text), h->weight);
+          asio::post(self->executor_, [self, h, r = self->admit_reply(std::move(h->text))]() mutable {
+            self->on_reply(std::move(r), h->weight);
             self->do_read();
           });
         });
@@ -325,6 +356,7 @@ class NdjsonSession final : public StreamSession {
     account_input();
   }
 
+  bool watching_ = false;  // a hang-up watch is outstanding (watch_for_hang_up)
   Stream socket_;
   asio::steady_timer timer_;
   std::shared_ptr<ListenerState> ls_;

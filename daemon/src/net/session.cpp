@@ -144,6 +144,23 @@ void StreamSession::on_reply(std::string reply, std::size_t weight) {
   if (!reply.empty()) enqueue(std::make_shared<const std::string>(std::move(reply)), false);
 }
 
+StreamSession::AdmittedReply StreamSession::admit_reply(std::string reply) {
+  if (reply.empty()) return {};
+  auto m = std::make_shared<const std::string>(std::move(reply));
+  const bool admitted = !refusing_.load() && out_.admit(*m, limits_.max_in_flight);
+  return {std::move(m), admitted};
+}
+
+void StreamSession::on_reply(AdmittedReply reply, std::size_t weight) {
+  in_flight_ -= std::min(in_flight_, weight);
+  if (!reply.message) return;
+  if (!reply.admitted) {
+    slow_reader("its outgoing queue is full (the peer does not read its answers)");
+    return;
+  }
+  enqueue(std::move(reply.message), true);
+}
+
 void StreamSession::write_started() {
   writing_ = true;
   write_deadline_.started([self = shared_from_this()] { return !self->closed_ && self->writing_; },
@@ -165,6 +182,7 @@ bool StreamSession::mark_closed(const std::string& why) {
   if (closed_) return false;
   closed_ = true;
   refusing_ = true;
+  mark_gone();
   if (!why.empty()) spdlog::info("{} {}: closing: {}", transport(), peer(), why);
   write_deadline_.cancel();
   login_timer_.cancel();

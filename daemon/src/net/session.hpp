@@ -140,6 +140,15 @@ class StreamSession : public rpc::Session, public std::enable_shared_from_this<S
   // The reply to requests that weigh `weight` (a batch: its elements) is back; empty: nothing
   // to send (notifications only).
   void on_reply(std::string reply, std::size_t weight);
+  // A reply that comes back on another thread (a worker) is admitted to the output budget
+  // there, before it waits for the strand: answers waiting for a busy io thread count
+  // against server.max_buffered_bytes like those queued. Then on the strand, on_reply.
+  struct AdmittedReply {
+    OutputQueue::Message message;  // null: nothing to send
+    bool admitted = false;
+  };
+  AdmittedReply admit_reply(std::string reply);
+  void on_reply(AdmittedReply reply, std::size_t weight);
   // A write is starting: it has write_timeout to complete.
   void write_started();
   // The write of the first `n` queued messages ended: false when the session is closed (or

@@ -135,7 +135,7 @@ class WsSession final : public StreamSession {
     buffer_.shrink_to_fit();
     auto weight = std::make_shared<std::size_t>(1);
     const auto w = st_->ctx.dispatcher.handle(text, shared_from_this(), [self = self(), weight](std::string r) {
-      asio::post(self->executor_, [self, weight, r = std::move(r)]() mutable {
+      asio::post(self->executor_, [self, weight, r = self->admit_reply(std::move(r))]() mutable {
         self->on_reply(std::move(r), *weight);
         self->do_read();
       });

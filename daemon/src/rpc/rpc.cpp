@@ -178,6 +178,7 @@ struct Dispatcher::Pending {
   std::string out;         // the answers so far, in request order: slots are moved in as
                            // soon as every earlier element has answered
   std::size_t next = 0, running = 0, remaining = 0, bytes = 2, flushed = 0;
+  std::size_t held = 0;  // of the dispatcher's assembly budget, given back when the answer goes
   bool pumping = false;
   std::function<void(std::string)> reply;
 };
@@ -199,6 +200,20 @@ std::vector<std::string> Dispatcher::names() const {
 }
 
 namespace {
+
+// An answer this small is always admitted to the assembly budget (errors, short results).
+constexpr std::size_t kSmallAnswer = 64u << 10;
+
+std::string no_room_text(const json& id, std::size_t bytes, std::size_t limit) {
+  return error_response(id, error_object(code::overloaded,
+                                         fmt::format("goniod is assembling other batches' answers "
+                                                     "(server.max_building_bytes = {}) and this "
+                                                     "element's {} bytes do not fit; ask again, "
+                                                     "or for less at a time",
+                                                     limit, bytes),
+                                         Errc::busy))
+      .dump(-1, ' ', false, kInvalidUtf8);
+}
 
 std::string too_large_text(const json& id, std::size_t bytes, std::size_t limit) {
   return error_response(id, error_object(code::unsupported,
@@ -282,10 +297,21 @@ void Dispatcher::pump(const std::shared_ptr<Pending>& p, const std::shared_ptr<S
         if (!r.empty()) {
           // The whole answer stays within the limit: an element that would push it over
           // answers with an error in its place (the call gets an error, not a partial reply).
+          // Every answer kept counts against the assembly budget until the batch's answer
+          // goes; one that does not fit is an error in its place (small: it always fits).
+          bool admitted = false;
           if (p->bytes + r.size() + 1 > limits_.max_response_bytes) {
             ++errors_;
             r = too_large_text(p->ids[i], p->bytes + r.size() + 1, limits_.max_response_bytes);
+          } else if (admit_building(r.size() + 1)) {
+            admitted = true;
+          } else {
+            ++errors_;
+            ++building_refused_;
+            r = no_room_text(p->ids[i], r.size() + 1, limits_.max_building_bytes);
           }
+          if (!admitted) admit_building(r.size() + 1);
+          p->held += r.size() + 1;
           p->bytes += r.size() + 1;
           p->slots[i] = std::move(r);
         }
@@ -304,6 +330,7 @@ void Dispatcher::pump(const std::shared_ptr<Pending>& p, const std::shared_ptr<S
         if (!out.empty()) out += ']';
         p->message = json();
         finish(std::move(out));
+        building_ -= p->held;
         return;
       }
       pump(p, session);
@@ -398,6 +425,13 @@ void invoke(const Method& method, Call call, Finish& finish) {
 
 }  // namespace
 
+bool Dispatcher::admit_building(std::size_t bytes) const {
+  const auto now = building_.fetch_add(bytes) + bytes;
+  if (bytes <= kSmallAnswer || now <= limits_.max_building_bytes) return true;
+  building_ -= bytes;
+  return false;
+}
+
 std::string Dispatcher::within_limit(std::string r, const json& id) const {
   if (r.size() <= limits_.max_response_bytes) return r;
   ++errors_;
@@ -420,7 +454,7 @@ void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
   auto finish = [this, notification = env.notification, id = env.id, done = std::move(done), whole](
                     std::optional<Result> result, std::optional<json> error) {
     if (error) ++errors_;
-    if (notification) {
+    if (notification || (!result && !error)) {
       done(std::string());
       return;
     }
@@ -451,13 +485,21 @@ void Dispatcher::handle_one(json& req, const std::shared_ptr<Session>& session,
     finish(std::nullopt, std::move(*refused));
     return;
   }
-  // Call holds its params by reference: they live in the closure that runs it.
-  auto run = [&method, session, who = std::move(who), name = std::move(env.method),
+  // Call holds its params by reference: they live in the closure that runs it. A read (a
+  // method a viewer may call) whose caller has hung up by the time it would start is not
+  // done: nobody can receive its answer, and a flood of abandoned reads would otherwise
+  // hold up the callers still connected. Commands run whatever happens to the connection.
+  auto run = [this, &method, session, who = std::move(who), name = std::move(env.method),
               params = std::move(env.params), finish = std::move(finish)]() mutable {
+    if (method.role <= Role::viewer && session->gone()) {
+      ++abandoned_;
+      finish(std::nullopt, std::nullopt);
+      return;
+    }
     invoke(method, Call{session, std::move(who), name, params}, finish);
   };
-  if (method.control && control_) control_(std::move(run));
-  else if ((method.blocking || (inline_gate_ && inline_gate_())) && blocking_) blocking_(std::move(run));
+  if (method.control && control_) control_(session->id(), std::move(run));
+  else if ((method.blocking || (inline_gate_ && inline_gate_())) && blocking_) blocking_(session->id(), std::move(run));
   else run();
 }
 

@@ -38,6 +38,7 @@
 #include "gonio/daemon/methods/methods.hpp"
 #include "gonio/daemon/net/net.hpp"
 #include "gonio/daemon/rpc/auth.hpp"
+#include "gonio/daemon/rpc/fair_queue.hpp"
 #include "gonio/daemon/rpc/governor.hpp"
 #include "gonio/daemon/rpc/hub.hpp"
 #include "gonio/daemon/rpc/rpc.hpp"
@@ -269,28 +270,33 @@ rpc::DispatchLimits dispatch_limits(const Config& config) {
   l.max_batch = config.max_batch;
   l.max_response_bytes = config.max_response_bytes;
   l.batch_window = config.max_in_flight;
+  l.max_building_bytes = config.max_building_bytes;
   return l;
 }
 
 // The dashboard's files. Unless server.web_root is set, a build tree's goniod serves the
 // tree's own (<build>/web/dist, beside bin/) before the installed one.
-// Blocking methods run on `workers`, each after yielding to the measurement and waiting its
-// turn at the governor; control methods on `control`.
+// Blocking methods run on `workers`, clients in turn (a FairQueue: one post per task, and
+// each post runs whichever task is next in rotation), each after yielding to the
+// measurement and waiting its turn at the governor; control methods on `control`.
 rpc::Dispatcher make_dispatcher(const Config& config, asio::thread_pool& workers, asio::thread_pool& control,
                                 rpc::ClientGovernor& governor) {
+  auto queue = std::make_shared<rpc::FairQueue>();
   return rpc::Dispatcher(
-      [&workers, &governor](std::function<void()> f) {
-        asio::post(workers, [&governor, f = std::move(f)] {
+      [&workers, &governor, queue](std::uint64_t client, std::function<void()> f) {
+        queue->push(client, std::move(f));
+        asio::post(workers, [&governor, queue] {
           yield_to_measurement();
           // The governor counts the requests' own CPU, on these threads: not the io threads'
           // reading, writing and notifications, which follow the measurement's pace.
           thread_local const bool counted = (rpc::mark_client_thread(), true);
           (void)counted;
           governor.wait_turn();
-          f();
+          if (auto task = queue->pop()) task();
         });
       },
-      [&control](std::function<void()> f) { asio::post(control, std::move(f)); }, dispatch_limits(config));
+      [&control](std::uint64_t, std::function<void()> f) { asio::post(control, std::move(f)); },
+      dispatch_limits(config));
 }
 
 // system.info's "transports": an object of counters per listener.

@@ -33,7 +33,9 @@ json net_stats(const Goniod& g) { return g.unix_conn().call("system.info")["net"
 
 TEST(Hostile, AmplifyingBatchesAreRefusedBeforeTheyCostMemory) {
   TempDir dir;
-  Goniod g(dir.path, mock_config({}));
+  // Room for 128 copies of the OpenRPC document in one answer (~8.4 MB, over the default
+  // 8 MiB; the batch assembly budget, 12 MiB, stays at its default).
+  Goniod g(dir.path, with_server("max_response_bytes = 16777216\n"));
   auto c = g.tcp_conn();  // no login: what anyone on the machine can send
   const std::string discover = R"({"jsonrpc":"2.0","id":1,"method":"rpc.discover"})";
   std::string batch = "[";
@@ -63,8 +65,36 @@ TEST(Hostile, AmplifyingBatchesAreRefusedBeforeTheyCostMemory) {
   r = json::parse(*c.line());
   ASSERT_TRUE(r.is_array());
   EXPECT_EQ(r.size(), 128u);
-  EXPECT_TRUE(r[127].contains("result"));
+  EXPECT_TRUE(r[127].contains("result")) << r[127].dump().substr(0, 400);
   EXPECT_LT(peak_rss(g.pid()), std::size_t{128} << 20) << "goniod's peak RSS";
+}
+
+// A peer that asks for a batch of reads and hangs up before they start: they are skipped
+// (the worker is busy with another client's prediction meanwhile), that client is answered,
+// and the batch's room in the assembly budget is given back.
+TEST(Hostile, ReadsOfAPeerThatHungUpAreSkipped) {
+  TempDir dir;
+  Goniod g(dir.path, with_server("rpc_threads = 1\n"));
+  auto tech = g.unix_conn();
+  auto quitter = g.unix_conn();
+  tech.send_raw(json{{"jsonrpc", "2.0"}, {"id", 1}, {"method", "twin.predict"},
+                     {"params", {{"bsdf", "conductor:alpha=0.05,eta=0.2,k=3.9"}, {"grids", {"in=45;out=-30:80:1"}},
+                                 {"rel_se", 0.002}}}}.dump() + "\n");
+  std::string batch = "[";
+  for (int i = 0; i < 128; ++i)
+    batch += (i ? "," : "") + json{{"jsonrpc", "2.0"}, {"id", i}, {"method", "scan.points"}, {"params", {{"scan", 1}}}}.dump();
+  quitter.send_raw(batch + "]\n");
+  { Conn gone = std::move(quitter); }  // hangs up without reading
+  const auto answer = tech.line(120s);
+  ASSERT_TRUE(answer);
+  EXPECT_TRUE(json::parse(*answer).contains("result")) << answer->substr(0, 300);
+  json rpc;
+  EXPECT_TRUE(eventually([&] {
+    rpc = g.unix_conn().call("system.info")["rpc"];
+    return rpc["building_bytes"].get<std::size_t>() == 0 && rpc["abandoned"].get<std::size_t>() > 0;
+  }, 20s)) << rpc.dump();
+  // Most of the batch was still waiting for the worker when the peer left.
+  EXPECT_GE(rpc["abandoned"].get<std::size_t>(), 100u) << rpc.dump();
 }
 
 TEST(Hostile, ResponsesOverTheLimitBecomeErrorsNotPartialReplies) {

@@ -169,7 +169,7 @@ class RegisteredMethods : public ::testing::Test {
   RegisteredMethods()
       : dir_(std::filesystem::temp_directory_path() /
              fmt::format("gonio-method-table-test-{}", ::getpid())),
-        d_([this](std::function<void()> f) {
+        d_([this](std::uint64_t, std::function<void()> f) {
           ++blocking_runs_;
           f();
         }) {

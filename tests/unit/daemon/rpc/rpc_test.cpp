@@ -1,6 +1,7 @@
 // JSON-RPC 2.0 semantics of the dispatcher (independent of any transport).
 #include <gtest/gtest.h>
 
+#include "gonio/daemon/rpc/fair_queue.hpp"
 #include "gonio/daemon/rpc/rpc.hpp"
 
 namespace gonio::daemon::rpc {
@@ -17,6 +18,7 @@ class TestSession final : public Session {
     set_principal(p);
   }
   bool push(std::shared_ptr<const std::string>) override { return true; }
+  void hang_up() { mark_gone(); }
 };
 
 class DispatcherTest : public ::testing::Test {
@@ -126,7 +128,7 @@ TEST_F(DispatcherTest, RolesGateMethods) {
 
 TEST(Dispatcher, BlockingMethodsRunOnTheExecutor) {
   std::vector<std::function<void()>> queued;
-  Dispatcher d([&](std::function<void()> f) { queued.push_back(std::move(f)); });
+  Dispatcher d([&](std::uint64_t, std::function<void()> f) { queued.push_back(std::move(f)); });
   d.add(Method{"slow", Role::viewer, true, [](Call&) { return json(1); }});
   std::string out;
   bool replied = false;
@@ -144,6 +146,91 @@ TEST(Dispatcher, BlockingMethodsRunOnTheExecutor) {
   const auto r = json::parse(out);
   EXPECT_EQ(r[0]["id"], 1);
   EXPECT_EQ(r[1]["id"], 2);
+}
+
+TEST(Dispatcher, ReadsOfAPeerThatHungUpAreNotDoneButCommandsAre) {
+  std::vector<std::function<void()>> queued;
+  Dispatcher d([&](std::uint64_t, std::function<void()> f) { queued.push_back(std::move(f)); });
+  int reads = 0, commands = 0;
+  d.add(Method{"read", Role::viewer, true, [&](Call&) { return json(++reads); }});
+  d.add(Method{"command", Role::technician, true, [&](Call&) { return json(++commands); }});
+  const auto session = std::make_shared<TestSession>(Role::technician);
+  std::vector<std::string> replies;
+  const auto reply = [&](std::string r) { replies.push_back(std::move(r)); };
+  d.handle(R"({"jsonrpc":"2.0","id":1,"method":"read"})", session, reply);
+  d.handle(R"([{"jsonrpc":"2.0","id":2,"method":"read"},{"jsonrpc":"2.0","id":3,"method":"command"}])", session, reply);
+  d.handle(R"({"jsonrpc":"2.0","method":"command"})", session, reply);
+  ASSERT_EQ(queued.size(), 4u);
+  queued[0]();  // still connected: done
+  session->hang_up();
+  for (std::size_t i = 1; i < queued.size(); ++i) queued[i]();
+  EXPECT_EQ(reads, 1);
+  EXPECT_EQ(commands, 2);  // a command, in a batch or alone, runs whatever the connection does
+  EXPECT_EQ(d.abandoned(), 1u);
+  ASSERT_EQ(replies.size(), 3u);  // every message is still answered (to nobody) exactly once
+  EXPECT_EQ(json::parse(replies[0])["result"], 1);
+}
+
+TEST(Dispatcher, AClientsBatchDoesNotStandBetweenAnotherClientAndItsAnswer) {
+  FairQueue queue;
+  Dispatcher d([&](std::uint64_t client, std::function<void()> f) { queue.push(client, std::move(f)); });
+  std::vector<std::string> order;
+  d.add(Method{"read", Role::viewer, true, [&](Call& c) {
+                 order.push_back(c.params.value("who", std::string()));
+                 return json(true);
+               }});
+  std::string batch = "[";
+  for (int i = 0; i < 10; ++i)
+    batch += (i ? "," : "") + json{{"jsonrpc", "2.0"}, {"id", i}, {"method", "read"}, {"params", {{"who", "flood"}}}}.dump();
+  std::string flood_answer, answer;
+  d.handle(batch + "]", std::make_shared<TestSession>(Role::viewer), [&](std::string r) { flood_answer = std::move(r); });
+  d.handle(R"({"jsonrpc":"2.0","id":1,"method":"read","params":{"who":"technician"}})",
+           std::make_shared<TestSession>(Role::viewer), [&](std::string r) { answer = std::move(r); });
+  while (auto task = queue.pop()) task();
+  ASSERT_EQ(order.size(), 11u);
+  EXPECT_EQ(order[1], "technician");  // after one task of the client queued first, not after its ten
+  EXPECT_EQ(json::parse(flood_answer).size(), 10u);
+  EXPECT_EQ(json::parse(answer)["result"], true);
+}
+
+TEST(Dispatcher, BatchAnswersBeingAssembledStayWithinTheirBudget) {
+  std::vector<std::function<void()>> queued;
+  DispatchLimits limits;
+  limits.max_building_bytes = 310u << 10;  // three answers of 100 KiB and their envelopes
+  Dispatcher d([&](std::uint64_t, std::function<void()> f) { queued.push_back(std::move(f)); }, nullptr, limits);
+  d.add(Method{"big", Role::viewer, true, [](Call&) { return json(std::string(100u << 10, 'x')); }});
+  d.add(Method{"small", Role::viewer, true, [](Call&) { return json("ok"); }});
+  const auto batch = [](std::initializer_list<const char*> methods) {
+    std::string b = "[";
+    int id = 0;
+    for (const char* m : methods) {
+      if (id) b += ',';
+      b += json{{"jsonrpc", "2.0"}, {"id", id++}, {"method", m}}.dump();
+    }
+    return b + "]";
+  };
+  std::string a, b;
+  d.handle(batch({"big", "big", "big"}), std::make_shared<TestSession>(Role::viewer), [&](std::string r) { a = std::move(r); });
+  d.handle(batch({"big", "big", "small"}), std::make_shared<TestSession>(Role::viewer), [&](std::string r) { b = std::move(r); });
+  ASSERT_EQ(queued.size(), 6u);
+  queued[0]();  // a[0]
+  queued[1]();  // a[1]
+  queued[3]();  // b[0]: 300 KiB held, the budget
+  EXPECT_GE(d.building_bytes(), 300u << 10);  // three answers held: no room for a fourth
+  queued[4]();  // b[1] does not fit
+  queued[5]();  // b[2] is small: always fits
+  ASSERT_FALSE(b.empty());
+  queued[2]();  // a[2]: b has gone, so it fits
+  ASSERT_FALSE(a.empty());
+  EXPECT_EQ(d.building_bytes(), 0u);  // all given back
+  EXPECT_EQ(d.building_refused(), 1u);
+  const auto ja = json::parse(a), jb = json::parse(b);
+  for (const auto& e : ja) EXPECT_TRUE(e.contains("result")) << e.dump().substr(0, 200);
+  EXPECT_TRUE(jb[0].contains("result"));
+  EXPECT_EQ(jb[1]["error"]["code"], code::overloaded);
+  EXPECT_EQ(jb[1]["id"], 1);
+  EXPECT_NE(jb[1]["error"]["message"].get<std::string>().find("server.max_building_bytes"), std::string::npos);
+  EXPECT_EQ(jb[2]["result"], "ok");
 }
 
 TEST(Dispatcher, BatchesAndValuesAreCountedBeforeParsing) {
@@ -181,7 +268,7 @@ TEST(Dispatcher, ABatchRunsAWindowAtATimeAndStaysWithinTheResponseLimit) {
   DispatchLimits limits;
   limits.batch_window = 2;
   limits.max_response_bytes = 200;
-  Dispatcher d([&](std::function<void()> f) { queued.push_back(std::move(f)); }, nullptr, limits);
+  Dispatcher d([&](std::uint64_t, std::function<void()> f) { queued.push_back(std::move(f)); }, nullptr, limits);
   d.add(Method{"slow", Role::viewer, true, [](Call& c) { return json(std::string(c.params.value("n", 1), 'x')); }});
   std::string batch = "[";
   for (int i = 0; i < 5; ++i)

@@ -107,12 +107,13 @@ struct Config {
   milliseconds idle_timeout{0};       // 0: connections may stay idle (subscribers)
   std::size_t max_queue = 1024;       // queued outgoing messages per connection
   std::size_t max_queue_bytes = 16u << 20;      // queued outgoing bytes per connection
-  std::size_t max_buffered_bytes = 64u << 20;   // queued outgoing bytes over all connections
+  std::size_t max_buffered_bytes = 48u << 20;   // queued outgoing bytes over all connections
   milliseconds write_timeout{10000};  // a write must complete within this (else: slow reader)
   milliseconds login_timeout{10000};  // TCP/WebSocket peers must authenticate within this
   std::size_t max_in_flight = 16;     // requests (batch elements) being handled per connection
   std::size_t max_batch = 128;        // elements of one batch
   std::size_t max_response_bytes = 8u << 20;
+  std::size_t max_building_bytes = 12u << 20;  // batch answers being assembled, over all connections
   std::vector<std::string> allowed_origins;  // browser origins besides the listener's own host
   // The dashboard's files, served on the HTTP listeners (empty: no dashboard). Unless the
   // file sets it (web_root_set), goniod serves a build tree's own beside its executable

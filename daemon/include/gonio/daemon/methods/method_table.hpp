@@ -54,7 +54,7 @@ inline constexpr std::array kMethodTable{
     MethodSpec{.name = "scan.pause", .role = Role::technician, .blocking = true, .control = true},
     MethodSpec{.name = "scan.resume", .role = Role::technician, .blocking = true, .control = true},
     MethodSpec{.name = "scan.cancel", .role = Role::technician, .blocking = true, .control = true},
-    MethodSpec{.name = "scan.points", .role = Role::viewer},
+    MethodSpec{.name = "scan.points", .role = Role::viewer, .blocking = true},  // a page is up to megabytes: with the exports
     MethodSpec{.name = "scan.export", .role = Role::viewer, .blocking = true},
     MethodSpec{.name = "scan.fit", .role = Role::technician, .blocking = true},
     MethodSpec{.name = "scan.material", .role = Role::technician, .blocking = true},

@@ -92,8 +92,16 @@ class Session {
   // is full (the transport then drops the connection).
   virtual bool push(std::shared_ptr<const std::string> message) = 0;
 
+  // Whether the peer has gone (the connection is closed): what it asked for and could only
+  // read is then not worth doing, since no answer can reach it.
+  bool gone() const noexcept { return gone_.load(std::memory_order_relaxed); }
+
+ protected:
+  void mark_gone() noexcept { gone_.store(true, std::memory_order_relaxed); }
+
  private:
   static std::atomic<std::uint64_t> next_id_;
+  std::atomic<bool> gone_{false};
   std::uint64_t id_;
   std::string transport_, peer_;
   bool persistent_;
@@ -129,14 +137,18 @@ struct Method {
   bool control = false;  // runs on the control executor (when there is one)
 };
 
-// Runs a blocking task somewhere else (a worker pool).
-using Executor = std::function<void(std::function<void()>)>;
+// Runs a blocking task somewhere else (a worker pool). `client` is the id of the session
+// the task is for, so that the pool can take clients in turn (FairQueue).
+using Executor = std::function<void(std::uint64_t client, std::function<void()>)>;
 
 struct DispatchLimits {
   std::size_t max_batch = 128;                 // elements of one batch
   std::size_t max_response_bytes = 8u << 20;   // one response, single or batch
   std::size_t max_values = 1u << 17;           // JSON values in one message (before parsing)
   std::size_t batch_window = 16;               // batch elements being processed at once
+  // Answers of batches still being assembled, over all connections: a batch's answers wait
+  // for each other, so without a bound every connection could hold a batch's worth.
+  std::size_t max_building_bytes = 12u << 20;
 };
 
 class Dispatcher {
@@ -166,6 +178,11 @@ class Dispatcher {
   // Counters for system.info.
   std::uint64_t requests() const noexcept { return requests_.load(); }
   std::uint64_t errors() const noexcept { return errors_.load(); }
+  // Reads not done because their caller had hung up before they started.
+  std::uint64_t abandoned() const noexcept { return abandoned_.load(); }
+  // Bytes of batch answers being assembled now; batch elements refused for want of room.
+  std::size_t building_bytes() const noexcept { return building_.load(); }
+  std::uint64_t building_refused() const noexcept { return building_refused_.load(); }
 
  private:
   struct Pending;
@@ -178,13 +195,17 @@ class Dispatcher {
   // A whole message's answer `r` to the request with `id`, or the error that says it is
   // larger than max_response_bytes.
   std::string within_limit(std::string r, const nlohmann::json& id) const;
+  // Takes `bytes` of the assembly budget (max_building_bytes); a small answer always fits,
+  // so that errors and short results are never refused.
+  bool admit_building(std::size_t bytes) const;
 
   Executor blocking_, control_;
   DispatchLimits limits_;
   std::function<bool(const Principal&)> check_;
   std::function<bool()> inline_gate_;
   std::map<std::string, Method, std::less<>> methods_;
-  mutable std::atomic<std::uint64_t> requests_{0}, errors_{0};
+  mutable std::atomic<std::uint64_t> requests_{0}, errors_{0}, abandoned_{0}, building_refused_{0};
+  mutable std::atomic<std::size_t> building_{0};
 };
 
 // A response object for `id` with `result`.
