@@ -189,36 +189,51 @@ double ParameterDesign::log_det_gain(const std::vector<double>& info_inv, std::s
   return std::log(std::max(1.0, M.partialPivLu().determinant()));
 }
 
-bool ParameterDesign::keeps_coverage(const std::vector<std::size_t>& pending, std::size_t c) const {
-  if (options_.max_cell_share >= 1) return true;
-  const long P = static_cast<long>(x_.size()), C = static_cast<long>(grid_.size());
-  const std::size_t cells = cell_.empty() ? 1 : cell_.back() + 1;
-  std::vector<Eigen::MatrixXd> Fcell(cells, Eigen::MatrixXd::Zero(P, P));
-  const auto info = [&](std::size_t q) -> Eigen::MatrixXd {
-    const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(jac_[q].data(), C, P);
-    const Eigen::Map<const Eigen::VectorXd> w(w_[q].data(), C);
-    return J.transpose() * w.asDiagonal() * J;
-  };
-  for (const auto q : measured_) Fcell[cell_[q]] += info(q);
-  for (const auto q : pending) Fcell[cell_[q]] += info(q);
-  // Each cell's share of the information, trace(F⁻¹ F_cell)/P (the prior keeps F
-  // invertible; its share is nobody's).
-  const auto shares = [&] {
-    Eigen::MatrixXd F = Eigen::MatrixXd::Zero(P, P);
-    for (const auto& f : Fcell) F += f;
-    for (long j = 0; j < P; ++j) F(j, j) += prior_[static_cast<std::size_t>(j)];
-    const auto llt = F.llt();
-    std::vector<double> out;
-    for (const auto& f : Fcell) out.push_back(llt.solve(f).trace() / static_cast<double>(P));
-    return out;
-  };
-  const auto before = shares();
-  const auto k = cell_[c];
+struct ParameterDesign::Coverage {
+  std::vector<Eigen::MatrixXd> cells;
+  Eigen::MatrixXd total;
+  std::size_t dominant = 0;
+};
+
+namespace {
+
+// J_cᵀ W_c J_c of one candidate (J row-major, channels × parameters).
+Eigen::MatrixXd point_information(const std::vector<double>& jac, const std::vector<double>& w, long P) {
+  const long C = static_cast<long>(w.size());
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(jac.data(), C, P);
+  const Eigen::Map<const Eigen::VectorXd> wv(w.data(), C);
+  return J.transpose() * wv.asDiagonal() * J;
+}
+
+}  // namespace
+
+ParameterDesign::Coverage ParameterDesign::coverage(const std::vector<std::size_t>& pending) const {
+  const long P = static_cast<long>(x_.size());
+  Coverage cov;
+  cov.cells.assign(cell_.empty() ? 1 : cell_.back() + 1, Eigen::MatrixXd::Zero(P, P));
+  for (const auto q : measured_) cov.cells[cell_[q]] += point_information(jac_[q], w_[q], P);
+  for (const auto q : pending) cov.cells[cell_[q]] += point_information(jac_[q], w_[q], P);
+  // The prior keeps F invertible; its share is nobody's.
+  cov.total = Eigen::MatrixXd::Zero(P, P);
+  for (const auto& f : cov.cells) cov.total += f;
+  for (long j = 0; j < P; ++j) cov.total(j, j) += prior_[static_cast<std::size_t>(j)];
+  const auto llt = cov.total.llt();
+  double most = -1;
+  for (std::size_t k = 0; k < cov.cells.size(); ++k)
+    if (const double share = llt.solve(cov.cells[k]).trace(); share > most) {
+      most = share;
+      cov.dominant = k;
+    }
+  return cov;
+}
+
+bool ParameterDesign::keeps_coverage(const Coverage& cov, std::size_t c) const {
   // Only the cell that gives the most already is held to the cap: the others may grow
-  // until they are that cell.
-  if (std::max_element(before.begin(), before.end()) - before.begin() != static_cast<long>(k)) return true;
-  Fcell[k] += info(c);
-  return shares()[k] <= options_.max_cell_share;
+  // until they are that cell. Its share: trace(F⁻¹ F_cell)/P.
+  if (options_.max_cell_share >= 1 || cell_[c] != cov.dominant) return true;
+  const auto dF = point_information(jac_[c], w_[c], static_cast<long>(x_.size()));
+  const Eigen::MatrixXd F = cov.total + dF, Fcell = cov.cells[cell_[c]] + dF;
+  return F.llt().solve(Fcell).trace() / static_cast<double>(x_.size()) <= options_.max_cell_share;
 }
 
 std::optional<std::size_t> ParameterDesign::next(const std::vector<std::size_t>& pending,
@@ -236,6 +251,7 @@ std::optional<std::size_t> ParameterDesign::next(const std::vector<std::size_t>&
     if (enough) return std::nullopt;
   }
   const auto inv = information(pending);
+  const auto cov = coverage(pending);
   // The most information per second; among the candidates that keep the seeds' coverage
   // when there are any.
   std::optional<std::size_t> best, best_covering;
@@ -248,7 +264,7 @@ std::optional<std::size_t> ParameterDesign::next(const std::vector<std::size_t>&
       best_score = score;
       best = c;
     }
-    if (score > best_covering_score && keeps_coverage(pending, c)) {
+    if (score > best_covering_score && keeps_coverage(cov, c)) {
       best_covering_score = score;
       best_covering = c;
     }

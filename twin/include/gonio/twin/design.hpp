@@ -232,8 +232,12 @@ class ParameterDesign final : public Design {
   // F⁻¹ of the points measured and `extra` with the prior: by the choice's weights (the
   // readings' u and the model's own), or by the readings' u alone (what the fit will say).
   std::vector<double> information(const std::vector<std::size_t>& extra, bool readings_only = false) const;
-  // Whether adding c keeps its seed's cell within max_cell_share of the information.
-  bool keeps_coverage(const std::vector<std::size_t>& pending, std::size_t c) const;
+  // The information of the points measured and pending by seed cell, their sum with the
+  // prior, and the cell that gives the largest share (parameter_design.cpp).
+  struct Coverage;
+  Coverage coverage(const std::vector<std::size_t>& pending) const;
+  // Whether adding c keeps the dominant cell within max_cell_share of the information.
+  bool keeps_coverage(const Coverage& cov, std::size_t c) const;
 
   std::string model_;
   WavelengthGrid grid_;
