@@ -319,6 +319,11 @@ void Dispatcher::pump(const std::shared_ptr<Pending>& p, const std::shared_ptr<S
         for (; p->flushed < p->slots.size() && p->done[p->flushed]; ++p->flushed) {
           auto& slot = p->slots[p->flushed];
           if (!slot) continue;
+          // Room for the largest answer allowed, taken once: growing by doubling would copy
+          // the answer and hold up to twice its bytes, which the assembly budget does not
+          // see. Pages not yet written cost no memory.
+          if (const auto need = p->out.size() + slot->size() + 2; need > p->out.capacity() && need > kSmallAnswer)
+            p->out.reserve(limits_.max_response_bytes + 2);
           p->out += p->out.empty() ? '[' : ',';
           p->out += *slot;
           slot.reset();
