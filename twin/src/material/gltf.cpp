@@ -19,7 +19,7 @@
 namespace gonio::twin::material {
 namespace {
 
-std::string num(double v) { return text::format_number(v); }
+using text::format_number;
 
 // The ramps of rgb_spectrum: blue up to 470 nm, green 530–560 nm, red from 610 nm.
 constexpr double kBlueNm = 470, kGreenLoNm = 530, kGreenHiNm = 560, kRedNm = 610;
@@ -56,9 +56,10 @@ nlohmann::json rgb_json(const std::array<double, 3>& c) { return {c[0], c[1], c[
 
 std::string rgb_spectrum(const std::array<double, 3>& rgb) {
   const auto& [r, g, b] = rgb;
-  if (r == g && g == b) return num(r);
-  return fmt::format("{}:{},{}:{},{}:{},{}:{}", num(kBlueNm), num(b), num(kGreenLoNm), num(g),
-                     num(kGreenHiNm), num(g), num(kRedNm), num(r));
+  if (r == g && g == b) return format_number(r);
+  return fmt::format("{}:{},{}:{},{}:{},{}:{}", format_number(kBlueNm), format_number(b),
+                     format_number(kGreenLoNm), format_number(g), format_number(kGreenHiNm),
+                     format_number(g), format_number(kRedNm), format_number(r));
 }
 
 std::array<double, 3> spectrum_rgb(std::span<const double> values, const WavelengthGrid& grid) {
@@ -79,9 +80,10 @@ std::array<double, 3> spectrum_rgb(std::span<const double> values, const Wavelen
 std::string gltf_spec(const GltfMaterial& m) {
   return fmt::format("gltf:base_color={},metallic={},roughness={},ior={},specular={},"
                      "specular_color={},clearcoat={},clearcoat_roughness={}",
-                     rgb_spectrum(m.base_color), num(m.metallic), num(m.roughness), num(m.ior),
-                     num(m.specular), rgb_spectrum(m.specular_color), num(m.clearcoat),
-                     num(m.clearcoat_roughness));
+                     rgb_spectrum(m.base_color), format_number(m.metallic),
+                     format_number(m.roughness), format_number(m.ior), format_number(m.specular),
+                     rgb_spectrum(m.specular_color), format_number(m.clearcoat),
+                     format_number(m.clearcoat_roughness));
 }
 
 GltfMaterial gltf_from_spec(std::string_view spec, const WavelengthGrid& grid) {

@@ -41,17 +41,18 @@
 namespace gonio::twin::material {
 namespace {
 
+using text::format_number;
+
 constexpr std::string_view kFormat = "Mitsuba 3 XML";
 constexpr double kLowNm = 360, kHighNm = 830;  // Mitsuba's spectral range
 
-std::string num(double v) { return text::format_number(v); }
 
 std::string spectrum_text(std::vector<std::pair<double, double>> pairs, double scale) {
-  if (pairs.size() == 1 && pairs.front().first == 0) return num(pairs.front().second * scale);
+  if (pairs.size() == 1 && pairs.front().first == 0) return format_number(pairs.front().second * scale);
   if (pairs.front().first > kLowNm) pairs.insert(pairs.begin(), {kLowNm, pairs.front().second});
   if (pairs.back().first < kHighNm) pairs.emplace_back(kHighNm, pairs.back().second);
   std::string s;
-  for (const auto& [nm, v] : pairs) s += (s.empty() ? "" : ", ") + num(nm) + ":" + num(v * scale);
+  for (const auto& [nm, v] : pairs) s += (s.empty() ? "" : ", ") + format_number(nm) + ":" + format_number(v * scale);
   return s;
 }
 
@@ -84,7 +85,7 @@ void check_writable(const Lobe& l, bool in_sum) {
 
 void microfacet(Writer& w, int d, std::string_view dist, double alpha) {
   w.value(d, "string", "distribution", std::string(dist));
-  w.value(d, "float", "alpha", num(alpha));
+  w.value(d, "float", "alpha", format_number(alpha));
   w.value(d, "boolean", "sample_visible", "true");
 }
 
@@ -104,26 +105,26 @@ void write_lobe(Writer& w, int d, const Lobe& l, double scale) {
     w.line(d, R"(<bsdf type="roughconductor">)");
     microfacet(w, d + 1, n == "beckmann" ? "beckmann" : "ggx", l.number("alpha"));
     if (n == "coat") {
-      w.value(d + 1, "spectrum", "eta", num(l.number("ior")));
+      w.value(d + 1, "spectrum", "eta", format_number(l.number("ior")));
       w.value(d + 1, "spectrum", "k", "0");
     } else {
       w.spectrum(d + 1, "eta", l, "eta", 1);
       w.spectrum(d + 1, "k", l, "k", 1);
     }
-    if (scale != 1) w.value(d + 1, "spectrum", "specular_reflectance", num(scale));
+    if (scale != 1) w.value(d + 1, "spectrum", "specular_reflectance", format_number(scale));
   } else if (n == "dielectric") {
     w.line(d, R"(<bsdf type="roughdielectric">)");
     microfacet(w, d + 1, "ggx", l.number("alpha"));
-    w.value(d + 1, "float", "int_ior", num(l.number("ior")));
+    w.value(d + 1, "float", "int_ior", format_number(l.number("ior")));
     w.value(d + 1, "float", "ext_ior", "1");
     if (scale != 1) {
-      w.value(d + 1, "spectrum", "specular_reflectance", num(scale));
-      w.value(d + 1, "spectrum", "specular_transmittance", num(scale));
+      w.value(d + 1, "spectrum", "specular_reflectance", format_number(scale));
+      w.value(d + 1, "spectrum", "specular_transmittance", format_number(scale));
     }
   } else if (n == "plastic") {
     w.line(d, R"(<bsdf type="roughplastic">)");
     microfacet(w, d + 1, "ggx", l.number("alpha"));
-    w.value(d + 1, "float", "int_ior", num(l.number("ior")));
+    w.value(d + 1, "float", "int_ior", format_number(l.number("ior")));
     w.value(d + 1, "float", "ext_ior", "1");
     w.spectrum(d + 1, "diffuse_reflectance", l, "albedo", 1);
     w.value(d + 1, "boolean", "nonlinear", "true");
@@ -139,7 +140,7 @@ void write_sum(Writer& w, int d, const std::vector<Lobe>& lobes, std::size_t k) 
   const double n = static_cast<double>(lobes.size());
   if (k == 1) return write_lobe(w, d, lobes[0], n);
   w.line(d, R"(<bsdf type="blendbsdf">)");
-  w.value(d + 1, "float", "weight", num(1.0 / static_cast<double>(k)));
+  w.value(d + 1, "float", "weight", format_number(1.0 / static_cast<double>(k)));
   write_sum(w, d + 1, lobes, k - 1);
   write_lobe(w, d + 1, lobes[k - 1], n);
   w.line(d, "</bsdf>");
