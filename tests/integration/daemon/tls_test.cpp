@@ -339,7 +339,10 @@ TEST(Tls, APeerThatDoesNotReadIsDroppedAsOverPlainTcp) {
   writer.join();
   EXPECT_TRUE(dropped) << net().dump();
   EXPECT_TRUE(eventually([&] { return net()["buffered_bytes"].get<std::size_t>() < 65536; })) << net().dump();
-  EXPECT_EQ(TlsConn(port_of(g.uri("tls://")), pki.ca).request("rpc.discover")["result"].is_object(), true);
+  // The server carries on (an answer within this test's 64 KiB queue: the OpenRPC document is larger).
+  TlsConn next(port_of(g.uri("tls://")), pki.ca);
+  next.call("auth.login", {{"token", g.admin_token()}});
+  EXPECT_TRUE(next.call("system.info").contains("version")) << "a new peer is served";
 }
 
 TEST(Tls, SighupServesARenewedCertificateToNewConnectionsWhileOldSessionsGoOn) {
