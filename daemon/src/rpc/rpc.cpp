@@ -295,10 +295,10 @@ void Dispatcher::pump(const std::shared_ptr<Pending>& p, const std::shared_ptr<S
         std::lock_guard l(p->mu);
         --p->running;
         if (!r.empty()) {
-          // The whole answer stays within the limit: an element that would push it over
-          // answers with an error in its place (the call gets an error, not a partial reply).
-          // Every answer kept counts against the assembly budget until the batch's answer
-          // goes; one that does not fit is an error in its place (small: it always fits).
+          // An element that would push the whole answer over the response limit, or the
+          // answers being assembled over their budget, answers with an error in its place (the
+          // call gets an error, not a partial reply). What is kept counts against the budget
+          // until the batch's answer goes; an error is small, so it always fits.
           bool admitted = false;
           if (p->bytes + r.size() + 1 > limits_.max_response_bytes) {
             ++errors_;
