@@ -331,6 +331,34 @@ Information information(const Eigen::MatrixXd& J, double chi2_per_dof) {
   return in;
 }
 
+// A model that misses leaves residuals with a shape of its own, alike in every channel of a
+// geometry and between neighbouring geometries, which √(χ²/dof) treats as independent noise.
+// The cluster-robust ("sandwich") covariance by geometry (White, Econometrica 50 (1982) 1;
+// Liang & Zeger, Biometrika 73 (1986) 13) takes the scatter of each geometry's pull on the
+// parameters instead: A⁻¹ B A⁻¹ with A = JᵀJ and B = Σ_g (J_gᵀ z_g)(J_gᵀ z_g)ᵀ, times
+// G/(G − n) for G geometries. Each parameter's variance becomes the larger of the two,
+// keeping the scaled covariance's correlations.
+void widen_for_misfit(const Eigen::MatrixXd& J, const std::vector<double>& z, std::size_t channels,
+                      double chi2_per_dof, Information& in) {
+  const Eigen::Index n = J.cols();
+  const std::size_t groups = channels == 0 ? 0 : z.size() / channels;
+  if (groups <= static_cast<std::size_t>(n) || groups * channels != z.size()) return;
+  const Eigen::MatrixXd Ainv = in.cov / std::max(1.0, chi2_per_dof);
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(n, n);
+  for (std::size_t g = 0; g < groups; ++g) {
+    const auto rows = static_cast<Eigen::Index>(channels), first = static_cast<Eigen::Index>(g * channels);
+    const Eigen::Map<const Eigen::VectorXd> zg(z.data() + first, rows);
+    const Eigen::VectorXd s = J.middleRows(first, rows).transpose() * zg;
+    B.noalias() += s * s.transpose();
+  }
+  const double small = static_cast<double>(groups) / static_cast<double>(groups - static_cast<std::size_t>(n));
+  const Eigen::MatrixXd robust = small * Ainv * B * Ainv;
+  Eigen::VectorXd widen = Eigen::VectorXd::Ones(n);
+  for (Eigen::Index j = 0; j < n; ++j)
+    if (in.cov(j, j) > 0 && robust(j, j) > in.cov(j, j)) widen(j) = std::sqrt(robust(j, j) / in.cov(j, j));
+  in.cov = widen.asDiagonal() * in.cov * widen.asDiagonal();
+}
+
 std::vector<std::vector<double>> correlation_of(const Eigen::MatrixXd& cov) {
   const auto n = static_cast<std::size_t>(cov.rows());
   std::vector<std::vector<double>> rho(n, std::vector<double>(n, 0.0));
@@ -450,7 +478,8 @@ FitResult solve(const Problem& problem, const FitOptions& options, Optimum* at) 
   // The optimum in x, its χ², and the Jacobian there.
   std::vector<double> x(n);
   for (std::size_t j = 0; j < n; ++j) x[j] = ev.bounds()[j].to_x(y(static_cast<Eigen::Index>(j)));
-  r.chi2 = chi2_at(ev.at(x), problem, at);
+  Optimum here;
+  r.chi2 = chi2_at(ev.at(x), problem, &here);
   r.dof = static_cast<long>(m) - static_cast<long>(n);
   r.chi2_per_dof = r.chi2 / static_cast<double>(r.dof);
   // The optimiser's last Jacobian is reused when it was taken at the optimum.
@@ -458,7 +487,9 @@ FitResult solve(const Problem& problem, const FitOptions& options, Optimum* at) 
       functor.last_x == x ? functor.last_jx : ev.jacobian(x, std::vector<double>(n, 1.0));
   r.evaluations = ev.evaluations();
 
-  const Information in = information(J, r.chi2_per_dof);
+  Information in = information(J, r.chi2_per_dof);
+  if (r.chi2_per_dof > options.misfit_limit) widen_for_misfit(J, here.z, problem.channels, r.chi2_per_dof, in);
+  if (at != nullptr) *at = std::move(here);
   r.correlation = correlation_of(in.cov);
   add_parameters(problem, x, y, in, r);
   bound_warnings(r.parameters, problem.channel, r.warnings);

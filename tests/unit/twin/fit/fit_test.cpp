@@ -128,7 +128,10 @@ TEST(FitMaterial, RecoversRoughnessFromIndependentQuadrature) {
   EXPECT_LT(r.chi2_per_dof, 1.5);
   ASSERT_EQ(r.naive.size(), 1u);
   const auto& n = r.naive[0].parameters[0];
-  EXPECT_GT(std::abs(n.value - 0.04), 5 * n.u) << "naive " << n.value << " ± " << n.u;
+  // The naive fit misses (χ²/dof in the hundreds), so its u is its residuals' scatter by
+  // geometry (solver.cpp): the bias shows against that u, and against the fit's error.
+  EXPECT_GT(std::abs(n.value - 0.04), 3 * n.u) << "naive " << n.value << " ± " << n.u;
+  EXPECT_GT(std::abs(n.value - 0.04), 20 * std::abs(a.value - 0.04));
   EXPECT_GT(r.naive[0].chi2_per_dof, 3.0);
   std::printf("alpha = %.6f ± %.6f (chi2/dof %.3f, %d evaluations); naive %.6f ± %.6f "
               "(chi2/dof %.2f)\n", a.value, a.u, r.chi2_per_dof, r.evaluations, n.value, n.u,

@@ -1,6 +1,6 @@
 // The solver on problems with a known answer: a χ² with many local minima, where
 // Levenberg–Marquardt from a poor start stops in the nearest one and the global start does
-// not; and the flags of a parameter pressed against its bound.
+// not; the flags of a parameter pressed against its bound; the uncertainty of a misfit.
 #include <cmath>
 #include <vector>
 
@@ -98,6 +98,55 @@ TEST(Solve, PerChannelParametersOnABoundAreOneWarning) {
     }
   EXPECT_EQ(bound_warnings, 1);
   EXPECT_NEAR(r.parameters[1].value, 0.4, 1e-4);
+}
+
+// A model that misses the same way in every channel of a geometry: a level μ fitted to
+// geometries whose true values scatter by d_g about it, alike in all C channels, read with
+// u = 1. The honest u of μ is the standard error of the mean over geometries,
+// s_d/√G; √(χ²/dof) counts the C channels as independent and gives about 1/√C of it. The
+// solver's cluster-robust covariance gives s_d/√G exactly; a fit that does not miss keeps
+// √(χ²/dof).
+TEST(Solve, AMisfitsUncertaintyComesFromTheScatterOfItsGeometries) {
+  static constexpr int G = 40, C = 8;
+  const auto level = [&](double spread) {
+    Problem p;
+    p.params = {{"mu", 0.5, -10, 10, false}};
+    p.channel = {-1};
+    p.group = {0};
+    p.channels = C;
+    for (int g = 0; g < G; ++g)
+      for (int k = 0; k < C; ++k) {
+        p.measured.push_back(1 + spread * std::sin(1.7 * g) + 0.3 * std::cos(2.3 * (g * C + k)));
+        p.u.push_back(1);
+      }
+    p.evaluate = [](const std::vector<double>& x, std::vector<double>& beta, std::vector<double>& se) {
+      beta.assign(G * C, x[0]);
+      se.assign(beta.size(), 0.0);
+    };
+    return p;
+  };
+  const auto misfit = level(4);
+  double mean = 0, ss = 0;
+  std::vector<double> per(G, 0);
+  for (int g = 0; g < G; ++g) {
+    for (int k = 0; k < C; ++k) per[g] += misfit.measured[static_cast<std::size_t>(g * C + k)] / C;
+    mean += per[g] / G;
+  }
+  for (const double v : per) ss += (v - mean) * (v - mean);
+  const double sem = std::sqrt(ss / (G - 1) / G);
+  const auto r = solve(misfit, FitOptions{});
+  ASSERT_GT(r.chi2_per_dof, 2);
+  EXPECT_NEAR(r.parameters[0].value, mean, 1e-6);
+  EXPECT_NEAR(r.parameters[0].u, sem, 1e-4 * sem);
+  auto birge_only = FitOptions{};
+  birge_only.misfit_limit = 1e6;  // widening applies to misfits only
+  const auto b = solve(misfit, birge_only);
+  EXPECT_NEAR(b.parameters[0].u, std::sqrt(r.chi2_per_dof / (G * C)), 1e-6);
+  EXPECT_GT(r.parameters[0].u, 2 * b.parameters[0].u) << "√(χ²/dof) would understate it about √C times";
+  // Noise alone (χ²/dof ≤ the limit): u as before.
+  const auto fits = solve(level(0), FitOptions{});
+  ASSERT_LT(fits.chi2_per_dof, 2);
+  EXPECT_NEAR(fits.parameters[0].u, std::sqrt(std::max(1.0, fits.chi2_per_dof) / (G * C)), 1e-6);
 }
 
 }  // namespace

@@ -153,7 +153,8 @@ struct FitOptions {
 struct FittedParameter {
   std::string name;
   double value = 0;
-  double u = 0;              // standard uncertainty (k = 1), scaled by √(χ²/dof) when > 1
+  double u = 0;              // standard uncertainty (k = 1): scaled by √(χ²/dof) when > 1, and for a
+                             // misfit at least the scatter of its geometries' pull (twin/fitting.md)
   double start = 0, lo = 0, hi = 0;
   bool at_bound = false;     // the optimum lies on a bound: u is not meaningful
   bool identifiable = true;  // false: strongly correlated or on a flat direction
