@@ -74,7 +74,7 @@ void add_design(CLI::App& app) {
   sub->add_option("--reading", o->timing.reading_s, "reading time per point, s")->capture_default_str();
   sub->add_option("--fit-samples", o->fit_samples, "twin paths per geometry in the refits")->capture_default_str();
   sub->add_flag("--exact-model", o->exact_model,
-                "parameters mode: choose as if the model described the sample exactly everywhere (no model u by region)");
+                "parameters mode: choose as if the model described the sample exactly everywhere (no model u by region, no spreading once it misfits)");
   sub->add_option("--max-cell-share", o->max_cell_share,
                   "parameters mode: the largest share of the information one seed's cell may give (1: no rule)")
       ->capture_default_str();
@@ -102,7 +102,10 @@ void add_design(CLI::App& app) {
       so.parameters.threads = model->threads;
       so.parameters.fit.samples = o->fit_samples;
       so.parameters.fit.threads = model->threads;
-      if (o->exact_model) so.parameters.model_trust = {.near_specular = 0, .per_10deg = 0, .grazing_deg = 90, .grazing_factor = 1};
+      if (o->exact_model) {
+        so.parameters.model_trust = {.near_specular = 0, .per_10deg = 0, .grazing_deg = 90, .grazing_factor = 1};
+        so.parameters.spread_on_misfit = false;
+      }
       so.parameters.max_cell_share = o->max_cell_share;
       so.curve.tolerance = o->tolerance;
       so.curve.timing = o->timing;

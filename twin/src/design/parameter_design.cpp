@@ -11,6 +11,7 @@
 // and ch. 17).
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <numeric>
 
 #include <Eigen/Dense>
@@ -251,6 +252,8 @@ std::optional<std::size_t> ParameterDesign::next(const std::vector<std::size_t>&
     if (enough) return std::nullopt;
   }
   const auto inv = information(pending);
+  if (options_.spread_on_misfit && fit_ && fit_->chi2_per_dof > options_.fit.misfit_limit)
+    return widest_gap(inv, pending, arms);
   const auto cov = coverage(pending);
   // The most information per second; among the candidates that keep the seeds' coverage
   // when there are any.
@@ -270,6 +273,45 @@ std::optional<std::size_t> ParameterDesign::next(const std::vector<std::size_t>&
     }
   }
   return best_covering ? best_covering : best;
+}
+
+namespace {
+
+// The larger of the angles between two geometries' incidence and receiving directions, in
+// degrees: how far apart two readings look at the sample.
+double separation(const Geometry& a, const Geometry& b) {
+  const auto angle = [](const std::array<double, 3>& u, const std::array<double, 3>& v) {
+    const double c = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+    return std::acos(std::clamp(c, -1.0, 1.0)) * 180 / std::numbers::pi;
+  };
+  return std::max(angle(a.incident_direction(), b.incident_direction()),
+                  angle(a.receiving_direction(), b.receiving_direction()));
+}
+
+}  // namespace
+
+std::optional<std::size_t> ParameterDesign::widest_gap(const std::vector<double>& info_inv,
+                                                       const std::vector<std::size_t>& pending,
+                                                       const Geometry& arms) const {
+  // Maximin distance (Johnson, Moore & Ylvisaker, J. Statist. Plann. Inference 26 (1990)
+  // 131): the candidate farthest from every point measured or pending; among equals (a
+  // regular grid has many), the most information per second.
+  std::optional<std::size_t> best;
+  double best_gap = -1, best_score = -1;
+  for (std::size_t c = 0; c < candidates_.size(); ++c) {
+    if (!available(c, pending) || !movable(arms, c)) continue;
+    double gap = 1e300;
+    for (const auto q : measured_) gap = std::min(gap, separation(candidates_[c], candidates_[q]));
+    for (const auto q : pending) gap = std::min(gap, separation(candidates_[c], candidates_[q]));
+    const double seconds = std::max(1e-3, options_.timing.point_s(arms, candidates_[c]));
+    const double score = log_det_gain(info_inv, c) / seconds;
+    if (gap > best_gap + 1e-6 || (gap > best_gap - 1e-6 && score > best_score)) {
+      best_gap = std::max(best_gap, gap);
+      best_score = score;
+      best = c;
+    }
+  }
+  return best;
 }
 
 std::vector<std::size_t> ParameterDesign::seeds() const {

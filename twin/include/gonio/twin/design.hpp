@@ -204,6 +204,12 @@ struct ParameterDesignOptions {
   // (trace(F⁻¹ F_cell) / P over the points measured and pending) while another cell can
   // still be chosen, so that no one region — a lobe's tail — determines them alone. 1: off.
   double max_cell_share = 0.5;
+  // Once the refit shows that the model misses (χ²/dof above fit.misfit_limit), its
+  // information says where the model is sensitive, not where the sample is described, and
+  // a fitted parameter means whatever the chosen geometries weigh it to mean. The choice
+  // then fills the largest gap among the candidates instead, so that the points tend to
+  // the uniform scan's and so does the estimate. false: the model's information throughout.
+  bool spread_on_misfit = true;
   void validate() const;
 };
 
@@ -238,6 +244,9 @@ class ParameterDesign final : public Design {
   Coverage coverage(const std::vector<std::size_t>& pending) const;
   // Whether adding c keeps the dominant cell within max_cell_share of the information.
   bool keeps_coverage(const Coverage& cov, std::size_t c) const;
+  // The choice once the model is seen to miss: the candidate farthest from every point in hand.
+  std::optional<std::size_t> widest_gap(const std::vector<double>& info_inv, const std::vector<std::size_t>& pending,
+                                        const Geometry& arms) const;
 
   std::string model_;
   WavelengthGrid grid_;
