@@ -5,6 +5,7 @@
 // the uniform scan's (twin/design.md).
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -186,6 +187,9 @@ TEST(Adaptive, OnAMeasuredTableTheAdaptiveEstimateAgreesWithTheUniformScans) {
     EXPECT_EQ(p["name"], u["name"]);
     EXPECT_LE(std::abs(p["value"].get<double>() - u["value"].get<double>()), 2 * u["u"].get<double>())
         << "adaptive " << p.dump() << " against the uniform scan's " << u.dump();
+    std::printf("%s: adaptive %.4g ± %.2g, uniform %.4g ± %.2g (%.2f u)\n", u["name"].get<std::string>().c_str(),
+                p["value"].get<double>(), p["u"].get<double>(), u["value"].get<double>(), u["u"].get<double>(),
+                (p["value"].get<double>() - u["value"].get<double>()) / u["u"].get<double>());
   }
   EXPECT_EQ(g.stop(), 0);
 }

@@ -293,20 +293,27 @@ double separation(const Geometry& a, const Geometry& b) {
 std::optional<std::size_t> ParameterDesign::widest_gap(const std::vector<double>& info_inv,
                                                        const std::vector<std::size_t>& pending,
                                                        const Geometry& arms) const {
-  // Maximin distance (Johnson, Moore & Ylvisaker, J. Statist. Plann. Inference 26 (1990)
-  // 131): the candidate farthest from every point measured or pending; among equals (a
-  // regular grid has many), the most information per second.
-  std::optional<std::size_t> best;
-  double best_gap = -1, best_score = -1;
+  // Maximin distance within a factor of two (after Johnson, Moore & Ylvisaker, J. Statist.
+  // Plann. Inference 26 (1990) 131): among the candidates at least half as far from every
+  // point measured or pending as the farthest one, the most information per second. The
+  // points stay spread as a maximin design's are, and the arms do not cross the range for
+  // each one.
+  std::vector<double> gaps(candidates_.size(), -1);
+  double widest = -1;
   for (std::size_t c = 0; c < candidates_.size(); ++c) {
     if (!available(c, pending) || !movable(arms, c)) continue;
     double gap = 1e300;
     for (const auto q : measured_) gap = std::min(gap, separation(candidates_[c], candidates_[q]));
     for (const auto q : pending) gap = std::min(gap, separation(candidates_[c], candidates_[q]));
+    gaps[c] = gap;
+    widest = std::max(widest, gap);
+  }
+  std::optional<std::size_t> best;
+  double best_score = -1;
+  for (std::size_t c = 0; c < candidates_.size(); ++c) {
+    if (gaps[c] < 0 || gaps[c] < widest / 2 - 1e-9) continue;
     const double seconds = std::max(1e-3, options_.timing.point_s(arms, candidates_[c]));
-    const double score = log_det_gain(info_inv, c) / seconds;
-    if (gap > best_gap + 1e-6 || (gap > best_gap - 1e-6 && score > best_score)) {
-      best_gap = std::max(best_gap, gap);
+    if (const double score = log_det_gain(info_inv, c) / seconds; score > best_score) {
       best_score = score;
       best = c;
     }

@@ -207,8 +207,9 @@ struct ParameterDesignOptions {
   // Once the refit shows that the model misses (χ²/dof above fit.misfit_limit), its
   // information says where the model is sensitive, not where the sample is described, and
   // a fitted parameter means whatever the chosen geometries weigh it to mean. The choice
-  // then fills the largest gap among the candidates instead, so that the points tend to
-  // the uniform scan's and so does the estimate. false: the model's information throughout.
+  // then fills the widest gaps among the candidates instead (twin/design.md), so that the
+  // points tend to the uniform scan's and so does the estimate. false: the model's
+  // information throughout.
   bool spread_on_misfit = true;
   void validate() const;
 };
