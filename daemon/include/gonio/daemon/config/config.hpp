@@ -107,7 +107,7 @@ struct Config {
   milliseconds idle_timeout{0};       // 0: connections may stay idle (subscribers)
   std::size_t max_queue = 1024;       // queued outgoing messages per connection
   std::size_t max_queue_bytes = 16u << 20;      // queued outgoing bytes per connection
-  std::size_t max_buffered_bytes = 40u << 20;   // queued outgoing bytes over all connections
+  std::size_t max_buffered_bytes = 32u << 20;   // queued outgoing bytes over all connections
   milliseconds write_timeout{10000};  // a write must complete within this (else: slow reader)
   milliseconds login_timeout{10000};  // TCP/WebSocket peers must authenticate within this
   std::size_t max_in_flight = 16;     // requests (batch elements) being handled per connection
